@@ -1,0 +1,203 @@
+#include "ifab/core/config.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <cstdint>
+#include <fstream>
+#include <sstream>
+
+namespace ifab {
+
+ConfigNode ConfigNode::LoadFile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) ThrowInputError("{}: cannot open the file", path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return FromString(ss.str(), path);
+}
+
+ConfigNode ConfigNode::FromString(const std::string& text, const std::string& name) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    ThrowInputError("{}:{}: not valid YAML: {}", name, e.mark.line + 1, e.msg);
+  }
+  return ConfigNode(root, std::make_shared<const std::string>(name), "", 1);
+}
+
+int ConfigNode::Line() const {
+  if (node_ && !node_.Mark().is_null()) return node_.Mark().line + 1;
+  return parent_line_;
+}
+
+std::string ConfigNode::Where() const {
+  return fmt::format("{}:{}: {}", *file_, Line(), path_.empty() ? "(top level)" : path_);
+}
+
+std::string ConfigNode::Text() const {
+  if (!node_ || node_.IsNull()) return "nothing";
+  YAML::Emitter e;
+  e.SetSeqFormat(YAML::Flow);
+  e.SetMapFormat(YAML::Flow);
+  e << node_;
+  std::string s = e.c_str();
+  if (s.size() > 80) s = s.substr(0, 77) + "...";
+  return s;
+}
+
+void ConfigNode::Fail(const std::string& expected) const {
+  ThrowInputError("{}: expected {}, got {}", Where(), expected, Text());
+}
+
+bool ConfigNode::Has(const std::string& key) const {
+  return node_.IsMap() && node_[key].IsDefined();
+}
+
+std::optional<ConfigNode> ConfigNode::Find(const std::string& key) const {
+  if (!node_.IsMap()) {
+    if (IsNull()) return std::nullopt;
+    Fail(fmt::format("a map with key '{}'", key));
+  }
+  const YAML::Node child = node_[key];
+  if (!child.IsDefined()) return std::nullopt;
+  return ConfigNode(child, file_, path_.empty() ? key : path_ + "." + key, Line());
+}
+
+ConfigNode ConfigNode::operator[](const std::string& key) const {
+  auto c = Find(key);
+  if (!c) {
+    const std::string full = path_.empty() ? key : path_ + "." + key;
+    ThrowInputError("{}:{}: {}: required field is missing", *file_, Line(), full);
+  }
+  return *c;
+}
+
+ConfigNode ConfigNode::operator[](std::size_t i) const {
+  ExpectSequence();
+  IFAB_THROW_UNLESS(i < node_.size(), "{}: expected at least {} elements, got {}", Where(), i + 1,
+                    node_.size());
+  return ConfigNode(node_[i], file_, fmt::format("{}[{}]", path_, i), Line());
+}
+
+std::vector<std::string> ConfigNode::Keys() const {
+  std::vector<std::string> keys;
+  if (!node_.IsMap()) return keys;
+  for (const auto& kv : node_) keys.push_back(kv.first.as<std::string>());
+  return keys;
+}
+
+void ConfigNode::ExpectKeys(std::initializer_list<const char*> allowed) const {
+  if (IsNull()) return;
+  ExpectMap();
+  for (const auto& kv : node_) {
+    const std::string key = kv.first.as<std::string>();
+    bool ok = false;
+    for (const char* a : allowed) ok = ok || key == a;
+    if (!ok) {
+      std::string list;
+      for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+      ThrowInputError("{}:{}: {}: unknown field (expected one of: {})", *file_,
+                      kv.first.Mark().line + 1, path_.empty() ? key : path_ + "." + key, list);
+    }
+  }
+}
+
+void ConfigNode::ExpectMap() const {
+  if (!node_.IsMap()) Fail("a map");
+}
+
+void ConfigNode::ExpectSequence(int n) const {
+  if (!node_.IsSequence()) Fail(n >= 0 ? fmt::format("a list of {} elements", n) : "a list");
+  if (n >= 0 && static_cast<int>(node_.size()) != n) Fail(fmt::format("a list of {} elements", n));
+}
+
+template <>
+double ConfigNode::As<double>() const {
+  if (!node_.IsScalar()) Fail("a number");
+  double v = 0.0;
+  if (!YAML::convert<double>::decode(node_, v) || !std::isfinite(v)) Fail("a number");
+  return v;
+}
+
+template <>
+int ConfigNode::As<int>() const {
+  if (!node_.IsScalar()) Fail("an integer");
+  int v = 0;
+  if (!YAML::convert<int>::decode(node_, v)) Fail("an integer");
+  return v;
+}
+
+template <>
+std::uint64_t ConfigNode::As<std::uint64_t>() const {
+  if (!node_.IsScalar()) Fail("a non-negative integer");
+  std::uint64_t v = 0;
+  if (!node_.Scalar().empty() && node_.Scalar()[0] == '-') Fail("a non-negative integer");
+  if (!YAML::convert<std::uint64_t>::decode(node_, v)) Fail("a non-negative integer");
+  return v;
+}
+
+template <>
+bool ConfigNode::As<bool>() const {
+  if (!node_.IsScalar()) Fail("true or false");
+  bool v = false;
+  if (!YAML::convert<bool>::decode(node_, v)) Fail("true or false");
+  return v;
+}
+
+template <>
+std::string ConfigNode::As<std::string>() const {
+  if (!node_.IsScalar()) Fail("a string");
+  return node_.Scalar();
+}
+
+std::vector<double> ConfigNode::AsNumbers(int n) const {
+  const std::string what = n >= 0 ? fmt::format("a list of {} numbers", n) : "a list of numbers";
+  if (!node_.IsSequence() || (n >= 0 && static_cast<int>(node_.size()) != n)) Fail(what);
+  std::vector<double> out;
+  for (const auto& e : node_) {
+    double v = 0.0;
+    if (!e.IsScalar() || !YAML::convert<double>::decode(e, v) || !std::isfinite(v)) Fail(what);
+    out.push_back(v);
+  }
+  return out;
+}
+
+Eigen::Vector3d ConfigNode::AsVector3() const {
+  const auto v = AsNumbers(3);
+  return {v[0], v[1], v[2]};
+}
+
+void ConfigNode::ReadPositive(const std::string& key, double& value) const {
+  if (auto c = Find(key)) {
+    value = c->As<double>();
+    if (!(value > 0.0)) c->Fail("a positive number");
+  }
+}
+void ConfigNode::ReadPositive(const std::string& key, int& value) const {
+  if (auto c = Find(key)) {
+    value = c->As<int>();
+    if (value <= 0) c->Fail("a positive integer");
+  }
+}
+void ConfigNode::ReadNonNegative(const std::string& key, double& value) const {
+  if (auto c = Find(key)) {
+    value = c->As<double>();
+    if (value < 0.0) c->Fail("a number >= 0");
+  }
+}
+void ConfigNode::ReadNonNegative(const std::string& key, int& value) const {
+  if (auto c = Find(key)) {
+    value = c->As<int>();
+    if (value < 0) c->Fail("an integer >= 0");
+  }
+}
+void ConfigNode::ReadInRange(const std::string& key, double& value, double lo, double hi) const {
+  if (auto c = Find(key)) {
+    value = c->As<double>();
+    if (value < lo || value > hi) c->Fail(fmt::format("a number in [{}, {}]", lo, hi));
+  }
+}
+
+}  // namespace ifab

@@ -1,0 +1,63 @@
+#include "ifab/core/config.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+namespace ifab {
+namespace {
+
+using ::testing::HasSubstr;
+
+std::string ErrorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Config, ReadsTypedFieldsAndKeepsDefaults) {
+  const auto c = ConfigNode::FromString("a: 1.5\nb: 3\nname: x\nv: [1, 2, 3]\n", "t.yaml");
+  double a = 0, d = 7;
+  int b = 0;
+  c.ReadPositive("a", a);
+  c.ReadPositive("b", b);
+  c.Read("d", d);
+  EXPECT_EQ(a, 1.5);
+  EXPECT_EQ(b, 3);
+  EXPECT_EQ(d, 7);
+  EXPECT_EQ(c.Get<std::string>("name"), "x");
+  EXPECT_EQ(c["v"].AsVector3(), Eigen::Vector3d(1, 2, 3));
+}
+
+TEST(Config, ErrorsNameFileLineFieldAndExpectation) {
+  const auto c = ConfigNode::FromString("lrf:\n  sigma: -1\n  beams: many\n", "lrf.yaml");
+  double sigma = 1;
+  int beams = 1;
+  EXPECT_THAT(ErrorOf([&] { c["lrf"].ReadPositive("sigma", sigma); }),
+              HasSubstr("lrf.yaml:2: lrf.sigma: expected a positive number, got -1"));
+  EXPECT_THAT(ErrorOf([&] { c["lrf"].Read("beams", beams); }),
+              HasSubstr("lrf.yaml:3: lrf.beams: expected an integer, got many"));
+  EXPECT_THAT(ErrorOf([&] { c["lrf"].Get<double>("range"); }),
+              HasSubstr("lrf.range: required field is missing"));
+  EXPECT_THAT(ErrorOf([&] { c["lrf"].ExpectKeys({"sigma"}); }),
+              HasSubstr("lrf.yaml:3: lrf.beams: unknown field"));
+}
+
+TEST(Config, BadYamlAndMissingFile) {
+  EXPECT_THAT(ErrorOf([] { ConfigNode::FromString("a: [1, 2\n", "bad.yaml"); }),
+              HasSubstr("bad.yaml:"));
+  EXPECT_THAT(ErrorOf([] { ConfigNode::LoadFile("/nonexistent/x.yaml"); }),
+              HasSubstr("/nonexistent/x.yaml: cannot open"));
+}
+
+TEST(Config, SequencesNameTheirIndex) {
+  const auto c = ConfigNode::FromString("bricks:\n  - size: [0.24, 0.1, 0.05]\n  - size: [0.24, -0.1]\n",
+                                        "site.yaml");
+  EXPECT_THAT(ErrorOf([&] { c["bricks"][1]["size"].AsNumbers(3); }),
+              HasSubstr("site.yaml:3: bricks[1].size: expected a list of 3 numbers, got [0.24, -0.1]"));
+}
+
+}  // namespace
+}  // namespace ifab

@@ -1,0 +1,41 @@
+#pragma once
+/// \file
+/// The hardware interface the stack drives. The simulator (sim::SimRobot) implements it, and
+/// so would a driver for the real machine; no algorithm can tell which one it talks to.
+/// Sensor data is drained: each Take* call returns what arrived since the previous call.
+
+#include <vector>
+
+#include "ifab/msgs/msgs.h"
+
+namespace ifab::hal {
+
+class Robot {
+ public:
+  virtual ~Robot() = default;
+
+  /// Host clock [s].
+  virtual Seconds Now() const = 0;
+  /// Let dt of host time pass (the simulator steps its world; a real robot sleeps).
+  virtual void Wait(Seconds dt) = 0;
+
+  // Base.
+  /// Speed references for the tracks; held until the next command.
+  virtual void CommandTracks(const TrackCommand& command) = 0;
+
+  // Arm.
+  /// Hand a joint position trajectory to the arm's own controller (starts now).
+  virtual void SendJointTrajectory(const JointTrajectory& trajectory) = 0;
+  /// True while the arm controller is still executing a trajectory.
+  virtual bool ArmBusy() const = 0;
+  /// Vacuum gripper on (grip) or off (release).
+  virtual void SetGripper(bool grip) = 0;
+
+  // Sensors.
+  virtual std::vector<LaserScan> TakeLaserScans(DeviceId laser) = 0;
+  virtual std::vector<GyroSample> TakeGyroSamples() = 0;
+  virtual std::vector<JointState> TakeJointStates() = 0;
+  virtual std::vector<SyncPulse> TakeSyncPulses() = 0;
+};
+
+}  // namespace ifab::hal
