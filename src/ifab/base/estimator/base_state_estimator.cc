@@ -56,7 +56,8 @@ EstimatorOptions EstimatorOptions::FromConfig(const ConfigNode& node) {
                    "max_iterations", "converged_step", "min_matched_fraction",
                    "degeneracy_ratio", "max_rotation_jump_deg", "max_translation_jump",
                    "reseed_after_failures", "max_reference_gap_sigmas", "end_margin_sigmas",
-                   "prior_weight", "reference_weighting"});
+                   "prior_weight", "reference_weighting", "interpolate_reference",
+                   "keyframe_capacity"});
   node.ReadNonNegative("min_range", o.min_range);
   node.ReadPositive("max_range", o.max_range);
   node.ReadNonNegative("min_point_spacing", o.min_point_spacing);
@@ -83,6 +84,8 @@ EstimatorOptions EstimatorOptions::FromConfig(const ConfigNode& node) {
   node.ReadNonNegative("end_margin_sigmas", o.end_margin_sigmas);
   node.ReadNonNegative("prior_weight", o.prior_weight);
   if (auto c = node.Find("reference_weighting")) o.reference_weighting = ParseWeighting(*c);
+  node.Read("interpolate_reference", o.interpolate_reference);
+  node.ReadNonNegative("keyframe_capacity", o.keyframe_capacity);
   node.ReadNonNegative("gyro_weight", o.gyro_weight);
   if (auto c = node.Find("motion_prior")) o.motion_prior = ParseMotionPrior(*c);
   node.ReadPositive("max_associations", o.max_associations);
@@ -189,6 +192,7 @@ struct ReferenceLevel {
 
 struct Keyframe {
   bool active{false};
+  bool selected{false};    // in this scan's reference set
   std::uint64_t order{0};  // insertion counter: larger is newer
   Seconds t{0.0};
   Pose2 T_world_base;
@@ -269,8 +273,9 @@ struct BaseStateEstimator::Impl {
   explicit Impl(const EstimatorOptions& options) : o(options) {
     num_levels = static_cast<int>(o.coarse_sigmas.size()) + 1;
     const auto beams = static_cast<std::size_t>(o.max_beams);
-    keyframes.reserve(static_cast<std::size_t>(o.num_reference_scans));
-    for (int k = 0; k < o.num_reference_scans; ++k) {
+    const int capacity = std::max(o.num_reference_scans, o.keyframe_capacity);
+    keyframes.reserve(static_cast<std::size_t>(capacity));
+    for (int k = 0; k < capacity; ++k) {
       auto kf = std::make_unique<Keyframe>();
       kf->levels.resize(static_cast<std::size_t>(num_levels));
       for (auto& level : kf->levels) {
@@ -295,14 +300,15 @@ struct BaseStateEstimator::Impl {
     pairs.reserve(static_cast<std::size_t>(o.max_points) *
                   static_cast<std::size_t>(o.num_reference_scans * k));
     pair_begin.reserve(beams + 1);
-    kf_frames.reserve(static_cast<std::size_t>(o.num_reference_scans));
+    kf_frames.reserve(static_cast<std::size_t>(capacity));
+    candidates.reserve(static_cast<std::size_t>(capacity));
     knn_index.resize(static_cast<std::size_t>(k));
     knn_dist.resize(static_cast<std::size_t>(k));
     eq3.impl = this;
     solver.options.max_num_iterations = o.max_iterations + 1;  // TinySolver counts from 1
     // Stop when a step is below 1e-4 of the increment so far (the increment is relative to the
     // round's start pose: ~10 um for a 0.1 m motion).
-    solver.options.parameter_tolerance = 1e-4;
+    solver.options.parameter_tolerance = 1e-3;
     solver.options.gradient_tolerance = 1e-10;
   }
 
@@ -517,11 +523,15 @@ struct BaseStateEstimator::Impl {
       const double max_gap = o.max_reference_gap_sigmas > 0.0
                                  ? o.max_reference_gap_sigmas * LevelSigma(l)
                                  : std::numeric_limits<double>::infinity();
-      Thin(ReferenceSpacing(l), max_gap, o.max_beams, &level.cloud.points,
-           o.end_margin_sigmas * LevelSigma(l), &level.near_end);
-      ArcLengthWeights(level.cloud.points, ReferenceSpacing(l), max_gap, &level.weight);
-      if (o.residual == MatchResidual::kPointToLine) {
-        ComputeNormals(&level, std::max(3.0 * ReferenceSpacing(l), 2.0 * LevelSigma(l)));
+      if (o.interpolate_reference) {
+        Densify(ReferenceSpacing(l), max_gap, o.end_margin_sigmas * LevelSigma(l), &level);
+      } else {
+        Thin(ReferenceSpacing(l), max_gap, o.max_beams, &level.cloud.points,
+             o.end_margin_sigmas * LevelSigma(l), &level.near_end);
+        ArcLengthWeights(level.cloud.points, ReferenceSpacing(l), max_gap, &level.weight);
+        if (o.residual == MatchResidual::kPointToLine) {
+          ComputeNormals(&level, std::max(3.0 * ReferenceSpacing(l), 2.0 * LevelSigma(l)));
+        }
       }
       level.tree->buildIndex();
     }
@@ -549,6 +559,118 @@ struct BaseStateEstimator::Impl {
     }
   }
 
+  // The reference as a polyline: consecutive valid points are linked when they are at most
+  // max_link apart and the link is not nearly parallel to the beam (which is what a depth jump
+  // looks like); each chain of links is sampled every `spacing`. Points on no link (isolated
+  // returns) are dropped. Every sample then stands for the same length of surface, however
+  // sparse the beams were (far walls, grazing incidence), so eq. 1's sum does not pull towards
+  // where the reference happens to be dense nor stick to its sparse samples.
+  void Densify(double spacing, double max_link, double end_margin, ReferenceLevel* level) {
+    auto& pts = level->cloud.points;
+    pts.clear();
+    level->near_end.clear();
+    level->normals.clear();
+    level->weight.clear();
+    const std::size_t n = valid_base.size();
+    const Eigen::Vector2d origin = T_base_laser.translation();
+    constexpr double kMinSinIncidence = 0.17;  // links within 10 deg of the beam are depth jumps
+    auto linked = [&](std::size_t i) {  // i to i + 1
+      const Eigen::Vector2d d = valid_base[i + 1] - valid_base[i];
+      const double len = d.norm();
+      if (len > max_link) return false;
+      if (len < 1e-9) return true;
+      const Eigen::Vector2d ray = (valid_base[i] - origin).normalized();
+      return std::abs(ray.x() * d.y() - ray.y() * d.x()) / len >= kMinSinIncidence;
+    };
+    std::size_t i = 0;
+    while (i + 1 < n) {
+      if (!linked(i)) {
+        ++i;
+        continue;
+      }
+      // A chain from i to j (all links i..j-1 present).
+      std::size_t j = i + 1;
+      while (j + 1 < n && linked(j)) ++j;
+      const std::size_t first = pts.size();
+      chain_before.clear();  // arc position of each sample of this chain
+      double arc = 0.0, next = 0.0;
+      for (std::size_t k = i; k < j; ++k) {
+        const Eigen::Vector2d a = valid_base[k], b = valid_base[k + 1];
+        const double len = (b - a).norm();
+        const Eigen::Vector2d dir = len > 0.0 ? Eigen::Vector2d((b - a) / len) : Eigen::Vector2d(1.0, 0.0);
+        for (; next < arc + len; next += spacing) {
+          pts.push_back(a + (next - arc) * dir);
+          level->normals.emplace_back(-dir.y(), dir.x());
+          level->weight.push_back(1.0);
+          level->near_end.push_back(0);
+          chain_before.push_back(next);
+        }
+        arc += len;
+      }
+      // The chain's last point, unless a sample is already close to it.
+      if (arc - chain_before.back() > 0.5 * spacing) {
+        pts.push_back(valid_base[j]);
+        level->normals.push_back(level->normals.back());
+        level->weight.push_back(1.0);
+        level->near_end.push_back(0);
+        chain_before.push_back(arc);
+      }
+      // Flag samples within end_margin of either end of the chain.
+      for (std::size_t k = first; k < pts.size(); ++k) {
+        const double from_start = chain_before[k - first];
+        level->near_end[k] = (from_start < end_margin || arc - from_start < end_margin) ? 1 : 0;
+      }
+      i = j;
+    }
+    if (std::getenv("DENSIFY_DEBUG")) {
+      int ends = 0;
+      for (char c : level->near_end) ends += c;
+      std::fprintf(stderr, "densify: valid %zu -> samples %zu near_end %d (spacing %g link %g margin %g)\n", n, pts.size(), ends, spacing, max_link, end_margin);
+    }
+  }
+
+  // Distance used to pick keyframes: translation plus 1 m per radian of turn.
+  static double KeyframeDistance(const Pose2& a, const Pose2& b) {
+    const double dx = a.x - b.x, dy = a.y - b.y;
+    return std::sqrt(dx * dx + dy * dy) + std::abs(std::remainder(a.theta - b.theta, 2.0 * kPi));
+  }
+
+  // The reference set for a scan at the predicted pose: every kept keyframe, or, when more are
+  // kept than are matched, the num_reference_scans nearest to the pose.
+  std::vector<std::pair<double, Keyframe*>> candidates;  // scratch, reserved
+  void SelectReferences(const Pose2& T_world_base) {
+    candidates.clear();
+    for (auto& kf : keyframes) {
+      kf->selected = false;
+      if (kf->active) candidates.emplace_back(KeyframeDistance(kf->T_world_base, T_world_base), kf.get());
+    }
+    const auto n = std::min(candidates.size(), static_cast<std::size_t>(o.num_reference_scans));
+    std::nth_element(candidates.begin(), candidates.begin() + static_cast<std::ptrdiff_t>(n) -
+                                             (n > 0 ? 1 : 0),
+                     candidates.end());
+    for (std::size_t k = 0; k < n; ++k) candidates[k].second->selected = true;
+  }
+
+  // True if no kept keyframe is within the keyframe spacing of the pose.
+  bool NeedsKeyframe(const Pose2& T_world_base, Seconds t) {
+    const Keyframe* newest = Newest();
+    if (newest == nullptr) return true;
+    if (t - newest->t >= o.keyframe_interval && TranslationDistance(T_world_base, newest->T_world_base) > 0.0) {
+      return true;
+    }
+    const double d2 = o.keyframe_distance * o.keyframe_distance;
+    const double angle = DegToRad(o.keyframe_angle_deg);
+    for (const auto& kf : keyframes) {
+      if (!kf->active) continue;
+      const double dx = T_world_base.x - kf->T_world_base.x, dy = T_world_base.y - kf->T_world_base.y;
+      if (dx * dx + dy * dy < d2 &&
+          std::abs(std::remainder(T_world_base.theta - kf->T_world_base.theta, 2.0 * kPi)) < angle) {
+        return false;
+      }
+    }
+    return true;
+  }
+
   void DropOldKeyframes(Seconds t) {
     Keyframe* newest = Newest();
     for (auto& kf : keyframes) {
@@ -573,7 +695,7 @@ struct BaseStateEstimator::Impl {
     pair_begin.clear();
     kf_frames.clear();
     for (const auto& kf : keyframes) {
-      if (!kf->active) continue;
+      if (!kf->active || !kf->selected) continue;
       const ReferenceLevel& level = kf->levels[static_cast<std::size_t>(level_index)];
       if (level.cloud.points.empty()) continue;
       const Pose2 T_kf_base = kf->T_world_base.inverse() * T_world_base;
@@ -825,6 +947,7 @@ const BaseEstimate& BaseStateEstimator::AddScan(const LaserScan& scan,
   }
 
   // Eq. 3 by levels of sigma (coarse to fine when configured), re-associating in each.
+  m.SelectReferences(predicted);
   Eigen::Vector3d x(predicted.x, predicted.y, predicted.theta);
   m.eq3.use_gyro = e.gyro_used;
   m.eq3.gyro_weight = o.gyro_weight;
@@ -833,6 +956,7 @@ const BaseEstimate& BaseStateEstimator::AddScan(const LaserScan& scan,
   m.eq3.prior_weight = o.prior_weight;
   m.eq3.prior_lever = 1.0;
   const int fine = m.num_levels - 1;
+  bool pairs_current = false;  // the pairs were made at (about) the final pose
   for (int level = 0; level < m.num_levels; ++level) {
     const double sigma = m.LevelSigma(level);
     const double radius = o.search_radius_sigmas * std::sqrt(2.0) * sigma;
@@ -843,7 +967,7 @@ const BaseEstimate& BaseStateEstimator::AddScan(const LaserScan& scan,
       m.Associate(Pose2(x[0], x[1], x[2]), level, radius);
       if (m.pairs.empty()) break;
       // TinySolver's function tolerance is absolute (on 2 * cost): scale it with the pairs.
-      m.solver.options.function_tolerance = 1e-10 * static_cast<double>(m.pairs.size());
+      m.solver.options.function_tolerance = 1e-8 * static_cast<double>(m.pairs.size());
       m.eq3.x0 = x;
       Eigen::Vector3d increment = Eigen::Vector3d::Zero();
       const auto& summary = m.solver.Solve(m.eq3, &increment);
@@ -851,15 +975,25 @@ const BaseEstimate& BaseStateEstimator::AddScan(const LaserScan& scan,
       if (!increment.allFinite()) return finish_failed(EstimateStatus::kSolverFailed);
       x += increment;
       x[2] = WrapAngle(x[2]);
-      if (std::max(increment.head<2>().norm(), std::abs(increment[2])) < o.converged_step) break;
+      pairs_current = std::max(increment.head<2>().norm(), std::abs(increment[2])) < o.converged_step;
+      if (pairs_current) break;
     }
   }
   const Pose2 solved(x[0], x[1], x[2]);
   e.num_points = static_cast<int>(m.meas_base.size());
 
-  // Quality at the solution with a fresh association at the finest level.
+  // Quality at the solution, with a fresh association at the finest level unless the last
+  // round's pairs were made at (about) this pose already.
   const double sigma = o.sigma;
-  e.matched_fraction = m.Associate(solved, fine, o.search_radius_sigmas * std::sqrt(2.0) * sigma);
+  if (pairs_current) {
+    int matched = 0;
+    for (std::size_t i = 0; i + 1 < m.pair_begin.size(); ++i) {
+      matched += m.pair_begin[i + 1] > m.pair_begin[i] ? 1 : 0;
+    }
+    e.matched_fraction = m.meas_base.empty() ? 0.0 : static_cast<double>(matched) / static_cast<double>(m.meas_base.size());
+  } else {
+    e.matched_fraction = m.Associate(solved, fine, o.search_radius_sigmas * std::sqrt(2.0) * sigma);
+  }
   if (m.pairs.empty() || e.matched_fraction < o.min_matched_fraction) {
     return finish_failed(EstimateStatus::kTooFewPoints);
   }
@@ -902,12 +1036,8 @@ const BaseEstimate& BaseStateEstimator::AddScan(const LaserScan& scan,
   m.pose = solved;
   m.t_last = t;
 
-  // Reference set: a new keyframe when the robot moved or turned enough since the newest.
-  const Keyframe* newest = m.Newest();
-  const double moved = newest ? TranslationDistance(solved, newest->T_world_base) : 0.0;
-  if (newest == nullptr || moved >= o.keyframe_distance ||
-      AngleDistance(solved, newest->T_world_base) >= DegToRad(o.keyframe_angle_deg) ||
-      (t - newest->t >= o.keyframe_interval && moved > 0.0)) {
+  // Reference set: a new keyframe when no kept one is within the keyframe spacing.
+  if (m.NeedsKeyframe(solved, t)) {
     m.AddKeyframe(solved, t);
     e.keyframe_added = true;
   }

@@ -69,9 +69,13 @@ struct EstimatorOptions {
   int neighbors_per_reference{8};    ///< at most this many nearest points per reference scan
 
   // Reference scans (receding horizon of keyframes).
-  int num_reference_scans{3};           ///< keyframes kept as the reference set
-  double keyframe_distance{0.15};       ///< [m] a new keyframe after this much translation
-  double keyframe_angle_deg{5.0};       ///< [deg] ... or this much rotation
+  int num_reference_scans{3};           ///< keyframes matched against (the reference set)
+  /// Keyframes kept (within the horizon); when more than num_reference_scans, each scan is
+  /// matched against the num_reference_scans nearest to its predicted pose, and revisiting a
+  /// place reuses its keyframes instead of adding new ones. 0: keep num_reference_scans.
+  int keyframe_capacity{0};
+  double keyframe_distance{0.15};       ///< [m] a new keyframe when every kept one is this far
+  double keyframe_angle_deg{5.0};       ///< [deg] ... or turned this much from the pose
   double keyframe_interval{1e9};        ///< [s] ... or this much time while moving
   double horizon{60.0};                 ///< [s] keyframes older than this are dropped (not the newest)
   double reference_point_spacing{0.04};  ///< [m] spacing of the points kept in a keyframe
@@ -84,6 +88,11 @@ struct EstimatorOptions {
   /// sum is one-sided there and would pin the pose to the reference's. 0 keeps every point.
   double end_margin_sigmas{4.0};
   ReferenceWeighting reference_weighting{ReferenceWeighting::kNone};  ///< eq. 1 or arc length
+  /// Improvement: sample each reference scan as a polyline (consecutive points within
+  /// max_reference_gap_sigmas linked, not across depth jumps) every reference_point_spacing,
+  /// instead of keeping its raw (thinned) points. Sparse far or grazing samples otherwise make
+  /// eq. 1 lumpy and hold the pose at the reference (motion is underestimated).
+  bool interpolate_reference{false};
 
   // Eq. 2.
   double gyro_weight{1e6};  ///< c_G [1/rad^2]: weight of the squared gyro error against sum(1 - G)

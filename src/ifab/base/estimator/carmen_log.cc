@@ -100,8 +100,13 @@ CarmenLog ParseCarmenLog(std::istream& in, const std::string& name, const Carmen
       s.odom = r.Pose("odom_x odom_y odom_theta");
       s.scan.stamp.t = r.Number("timestamp");
       const double fov = DegToRad(options.flaser_fov_deg);
-      s.scan.angle_min = -0.5 * fov;
-      s.scan.angle_increment = n > 1 ? fov / (n % 2 == 1 ? n - 1 : n) : 0.0;
+      if (options.flaser_step_deg > 0.0) {
+        s.scan.angle_min = DegToRad(options.flaser_first_deg);
+        s.scan.angle_increment = DegToRad(options.flaser_step_deg);
+      } else {
+        s.scan.angle_min = -0.5 * fov;
+        s.scan.angle_increment = n > 1 ? fov / (n % 2 == 1 ? n - 1 : n) : 0.0;
+      }
       s.scan.range_min = options.range_min;
       s.scan.range_max = options.range_max;
       s.scan.stamp.t_device = s.scan.stamp.t;

@@ -27,6 +27,10 @@ namespace ifab::base {
 
 struct CarmenReadOptions {
   double flaser_fov_deg{180.0};  ///< [deg] field of view of FLASER lines (they carry no angles)
+  /// [deg] if set (> 0), FLASER beam i is at flaser_first_deg + i * flaser_step_deg instead of
+  /// the rule above (flaser_first_deg is then required too).
+  double flaser_step_deg{0.0};
+  double flaser_first_deg{-90.0};  ///< [deg] used with flaser_step_deg
   double range_max{80.0};        ///< [m] LaserScan::range_max; SICK logs use ~81.9 for "no return"
   double range_min{0.0};         ///< [m] LaserScan::range_min
 };

@@ -21,7 +21,7 @@ EstimateLogOptions EstimateLogOptions::FromConfig(const ConfigNode& node) {
   node.ExpectKeys({"estimator", "log", "evaluation"});
   if (auto c = node.Find("estimator")) o.estimator = EstimatorOptions::FromConfig(*c);
   if (auto c = node.Find("log")) {
-    c->ExpectKeys({"flaser_fov_deg", "range_max", "range_min", "T_base_laser",
+    c->ExpectKeys({"flaser_fov_deg", "flaser_step_deg", "flaser_first_deg", "range_max", "range_min", "T_base_laser",
                    "odometry_stall_jump_deg", "odometry_stall_jump_m", "odometry_translation_hint"});
     c->ReadPositive("odometry_stall_jump_m", o.odometry_stall_jump_m);
     c->Read("odometry_translation_hint", o.odometry_translation_hint);
@@ -29,6 +29,8 @@ EstimateLogOptions EstimateLogOptions::FromConfig(const ConfigNode& node) {
     c->ReadPositive("odometry_stall_jump_deg", stall_deg);
     o.odometry_stall_jump_rad = DegToRad(stall_deg);
     c->ReadInRange("flaser_fov_deg", o.reader.flaser_fov_deg, 1.0, 360.0);
+    c->ReadInRange("flaser_step_deg", o.reader.flaser_step_deg, 0.0, 10.0);
+    c->ReadInRange("flaser_first_deg", o.reader.flaser_first_deg, -360.0, 360.0);
     c->ReadPositive("range_max", o.reader.range_max);
     c->ReadNonNegative("range_min", o.reader.range_min);
     if (auto t = c->Find("T_base_laser")) {
