@@ -133,7 +133,8 @@ class CaseGenerator {
 ArmPlanningExperimentConfig ArmPlanningExperimentConfig::FromConfig(const ConfigNode& node,
                                                                     const ArmPlanningExperimentConfig& base) {
   node.ExpectMap();
-  node.ExpectKeys({"cases", "mix", "workspace", "sweep_deg", "home_deg", "ilqg", "ik"});
+  // seed, robot and arm are read by the experiment wrapper (src/ifab/experiments/arm_planning.cc).
+  node.ExpectKeys({"seed", "robot", "arm", "cases", "mix", "workspace", "sweep_deg", "home_deg", "ilqg", "ik"});
   ArmPlanningExperimentConfig c = base;
   node.ReadPositive("cases", c.cases);
   if (auto mix = node.Find("mix")) {
