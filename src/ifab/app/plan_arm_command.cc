@@ -73,7 +73,8 @@ void AddPlanArmCommand(CLI::App& app, int& exit_code) {
     const Vector6d to = ParseJoints(args->to, "--to", args->radians);
     const RobotModel robot = LoadRobotModel(args->urdf);
     for (int i = 0; i < 6; ++i) {
-      if (to[i] < robot.q_min[i] || to[i] > robot.q_max[i])
+      if (to[i] < robot.q_min[i] - arm::IlqgPlanner::kGoalLimitSlack ||
+          to[i] > robot.q_max[i] + arm::IlqgPlanner::kGoalLimitSlack)
         ThrowInputError("--to: joint {} = {:.3f} deg lies outside its limits [{:.1f}, {:.1f}] deg", i + 1,
                         RadToDeg(to[i]), RadToDeg(robot.q_min[i]), RadToDeg(robot.q_max[i]));
     }

@@ -16,6 +16,8 @@ namespace ifab::arm {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+// Cost changes below this are numerical noise (a motion of zero length costs exactly 0).
+constexpr double kCostFloor = 1e-12;
 
 Vector6d ReadVector6(const ConfigNode& node, const char* key, const Vector6d& fallback, bool positive) {
   auto c = node.Find(key);
@@ -336,15 +338,18 @@ bool IlqgPlanner::BackwardPass(double mu, double& dv_linear, double& dv_quadrati
   return true;
 }
 
-ArmPlan IlqgPlanner::Plan(const Vector6d& q_from, const Vector6d& q_goal, const Vector6d& qd_from) {
+ArmPlan IlqgPlanner::Plan(const Vector6d& q_from, const Vector6d& q_goal_in, const Vector6d& qd_from) {
   const auto start = std::chrono::steady_clock::now();
-  IFAB_THROW_UNLESS(q_from.allFinite() && q_goal.allFinite() && qd_from.allFinite(),
+  IFAB_THROW_UNLESS(q_from.allFinite() && q_goal_in.allFinite() && qd_from.allFinite(),
                     "iLQG: start and goal must be finite");
   for (int i = 0; i < 6; ++i) {
-    IFAB_THROW_UNLESS(q_goal[i] >= model_.q_min[i] && q_goal[i] <= model_.q_max[i],
+    IFAB_THROW_UNLESS(q_goal_in[i] >= model_.q_min[i] - kGoalLimitSlack && q_goal_in[i] <= model_.q_max[i] + kGoalLimitSlack,
                       "iLQG: goal joint {} = {:.4f} rad lies outside its limits [{:.4f}, {:.4f}]", i + 1,
-                      q_goal[i], model_.q_min[i], model_.q_max[i]);
+                      q_goal_in[i], model_.q_min[i], model_.q_max[i]);
   }
+  // A goal a rounding error outside a limit (e.g. 180 deg against a limit written 3.14159265)
+  // is moved onto it.
+  const Vector6d q_goal = q_goal_in.cwiseMax(model_.q_min).cwiseMin(model_.q_max);
   ArmPlan plan;
   PlanSummary& s = plan.summary;
   const double T = Duration(q_from, q_goal, qd_from);
@@ -426,13 +431,13 @@ ArmPlan IlqgPlanner::Plan(const Vector6d& q_from, const Vector6d& q_goal, const 
       std::swap(u_, u_new_);
       cost = new_cost;
       changed = true;
-      if (reduction < options_.tolerance_cost * cost) {
+      if (reduction <= options_.tolerance_cost * cost + kCostFloor) {
         converged = true;
         s.message = "cost change below tolerance";
       }
     } else {
       // Nothing left to gain at the full step: converged; else regularise more.
-      if (-(dv1 + dv2) < options_.tolerance_cost * cost) {
+      if (-(dv1 + dv2) <= options_.tolerance_cost * cost + kCostFloor) {
         converged = true;
         s.message = "expected cost change below tolerance";
         break;
@@ -457,8 +462,8 @@ ArmPlan IlqgPlanner::Plan(const Vector6d& q_from, const Vector6d& q_goal, const 
     p.t = dt_ * k;
     p.q = x_[k].head<6>();
     p.qd = x_[k].tail<6>();
-    within = within && ((p.q - model_.q_min).array() >= -1e-9).all() &&
-             ((model_.q_max - p.q).array() >= -1e-9).all() &&
+    within = within && ((p.q - model_.q_min).array() >= -kGoalLimitSlack).all() &&
+             ((model_.q_max - p.q).array() >= -kGoalLimitSlack).all() &&
              (p.qd.cwiseAbs().array() <= model_.qd_max.array() + 1e-9).all();
     if (k < n_) {
       Vector6d tau = u_[k];

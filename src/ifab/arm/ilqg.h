@@ -100,7 +100,7 @@ struct PlanSummary {
   int steps{0};                   ///< time steps N
   double final_position_error{0.0};  ///< max_i |q_N,i - q_goal,i| [rad]
   double final_speed{0.0};        ///< max_i |qd_N,i| [rad/s]
-  bool within_limits{false};      ///< positions, speeds and torques within the hard limits
+  bool within_limits{false};      ///< positions (to kGoalLimitSlack), speeds and torques within the hard limits
   bool reached_goal{false};       ///< final error and speed within the goal tolerances
 
   /// The trajectory may be executed: within limits and at the goal.
@@ -123,10 +123,15 @@ struct ArmPlan {
 /// plan so far nothing is allocated); not thread-safe, use one per thread.
 class IlqgPlanner {
  public:
+  /// [rad] goals this close outside a position limit are moved onto it; trajectories may touch
+  /// the limits within it (limits in the URDF are rounded to 1e-8 rad).
+  static constexpr double kGoalLimitSlack = 1e-6;
+
   explicit IlqgPlanner(const ArmModel& model, IlqgOptions options = {});
 
   /// Plan from (q_from, qd_from) to q_goal at rest. Throws InputError if q_goal lies outside the
-  /// joint limits or an input is not finite; numerical outcomes are in the summary.
+  /// joint limits (by more than kGoalLimitSlack; closer goals are moved onto the limit) or an
+  /// input is not finite; numerical outcomes are in the summary.
   ArmPlan Plan(const Vector6d& q_from, const Vector6d& q_goal,
                const Vector6d& qd_from = Vector6d::Zero());
 

@@ -122,6 +122,17 @@ TEST_F(IlqgTest, LiteralTorqueEffortAlsoConverges) {
   EXPECT_TRUE(plan.summary.IsUsable()) << plan.summary.BriefReport();
 }
 
+TEST_F(IlqgTest, HandlesAZeroLengthMotionAndGoalsOnTheLimits) {
+  IlqgPlanner planner(model_, options_);
+  const Vector6d q = Deg(10, 20, 30, 40, 50, 60);
+  const ArmPlan still = planner.Plan(q, q);
+  EXPECT_EQ(still.summary.status, PlanStatus::kConverged) << still.summary.BriefReport();
+  EXPECT_EQ(still.summary.cost, 0.0);
+  // 180 deg lies a rounding error beyond the URDF's 3.14159265: accepted, moved onto the limit.
+  const ArmPlan edge = planner.Plan(Vector6d::Zero(), Deg(180, 150, -180, 400, 120, 400));
+  EXPECT_TRUE(edge.summary.IsUsable()) << edge.summary.BriefReport();
+}
+
 TEST_F(IlqgTest, RejectsAGoalOutsideTheLimits) {
   IlqgPlanner planner(model_, options_);
   Vector6d to = Vector6d::Zero();
