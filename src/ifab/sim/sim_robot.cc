@@ -70,7 +70,11 @@ SimOptions SimOptions::FromConfig(const ConfigNode& c) {
     g->ReadNonNegative("release_sigma_yaw_deg", o.release_sigma_yaw_deg);
   }
   if (auto f = c.Find("feeder")) {
-    f->ExpectKeys({"sigma_xy", "sigma_yaw_deg"});
+    f->ExpectKeys({"pose_in_base", "sigma_xy", "sigma_yaw_deg"});
+    if (auto p = f->Find("pose_in_base")) {
+      const auto v = p->AsNumbers(6);
+      o.T_base_feeder = PoseFromXyzRpy(v[0], v[1], v[2], v[3], v[4], v[5]);
+    }
     f->ReadNonNegative("sigma_xy", o.feeder_sigma_xy);
     f->ReadNonNegative("sigma_yaw_deg", o.feeder_sigma_yaw_deg);
   }
@@ -104,7 +108,7 @@ void SimRobot::PresentFeederBrick() {
   const Site& site = world_.site();
   feeder_brick_.name = "brick_" + std::to_string(bricks_released_);
   feeder_brick_.box = site.brick;
-  feeder_brick_.T_site_box = site.T_site_feeder_pick *
+  feeder_brick_.T_site_box = options_.T_base_feeder *
       PoseFromXyzRpy(gripper_rng_.Normal(options_.feeder_sigma_xy), gripper_rng_.Normal(options_.feeder_sigma_xy), 0,
                      0, 0, DegToRad(gripper_rng_.Normal(options_.feeder_sigma_yaw_deg)));
 }
@@ -115,6 +119,12 @@ Pose3 SimRobot::TrueSiteBase(const Pose2& p) const {
 
 Pose3 SimRobot::ArmLaserPose(const Pose2& base, const Vector6d& q) const {
   return TrueSiteBase(base) * robot_.T_base_arm_base * robot_.ArmForwardKinematics(q) * T_tool0_arm_laser_true_;
+}
+
+SiteBox SimRobot::feeder_brick() const {
+  SiteBox b = feeder_brick_;
+  b.T_site_box = TrueSiteBase(base_.pose()) * feeder_brick_.T_site_box;
+  return b;
 }
 
 Pose3 SimRobot::true_T_site_gripper() const {
@@ -192,7 +202,7 @@ void SimRobot::SetGripper(bool grip) {
   const Pose3 T_site_gripper = true_T_site_gripper();
   if (grip && !held_) {
     // Grip the feeder's brick if the cup touches its top face.
-    const Pose3& T_site_brick = feeder_brick_.T_site_box;
+    const Pose3 T_site_brick = feeder_brick().T_site_box;
     const Eigen::Vector3d top = T_site_brick * Eigen::Vector3d(0, 0, 0.5 * feeder_brick_.box.size.z());
     if ((T_site_gripper.translation() - top).norm() < options_.grip_capture_distance) {
       held_ = T_site_gripper.inverse(Eigen::Isometry) * T_site_brick;

@@ -32,6 +32,7 @@ struct SimOptions {
   double grip_capture_distance{0.02};   ///< [m] the gripper grips a brick within this distance
   double release_sigma_xy{0.0003};      ///< [m] brick placement error at release
   double release_sigma_yaw_deg{0.05};
+  Pose3 T_base_feeder{Pose3::Identity()};  ///< where the on-board feeder presents a brick (centre)
   double feeder_sigma_xy{0.0003};       ///< [m] how precisely the feeder presents a brick
   double feeder_sigma_yaw_deg{0.05};
 
@@ -68,7 +69,8 @@ class SimRobot final : public hal::Robot {
   /// True pose of the gripper contact point in the site.
   Pose3 true_T_site_gripper() const;
   bool holding_brick() const { return held_.has_value(); }
-  const SiteBox& feeder_brick() const { return feeder_brick_; }
+  /// The brick the feeder presents now (true pose in the site).
+  SiteBox feeder_brick() const;
   /// The gyro's current bias (truth).
   Eigen::Vector3d true_gyro_bias() const { return gyro_.bias(); }
 
@@ -110,7 +112,7 @@ class SimRobot final : public hal::Robot {
   std::vector<SyncPulse> pulses_;
 
   std::optional<Pose3> held_;  ///< T_gripper_brick of the held brick
-  SiteBox feeder_brick_;
+  SiteBox feeder_brick_;  ///< its pose is T_base_brick: the feeder rides on the base
   int bricks_released_{0};
 };
 
