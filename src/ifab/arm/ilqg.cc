@@ -46,6 +46,74 @@ void Quintic(const Vector6d& q0, const Vector6d& v0, const Vector6d& q1, double 
 
 }  // namespace
 
+// Per joint, the optimum of the decoupled problem min int (w_v v^2 + w_e (m a / s)^2) dt of a
+// double integrator with the joint's own inertia m (the diagonal of M(q) halfway): the 4th
+// derivative of p is k^2 times its 2nd, k = s sqrt(w_v / w_e) / m, so
+// p(t) = c0 + c1 t + c2 cosh(k (t - T/2)) + c3 sinh(k (t - T/2)) (a cubic when k T is tiny),
+// from (q0, v0) to (q1, 0) in time T.
+void IlqgPlanner::WarmStartProfile::Fit(const Vector6d& q0, const Vector6d& v0, const Vector6d& q1, double T_in,
+                                        const Vector6d& k_in) {
+  T = T_in;
+  k = k_in;
+  for (int i = 0; i < 6; ++i) {
+    k[i] = std::min(k[i], 60.0 / T);  // beyond this the profile is a ramp anyway; keeps cosh finite
+    Eigen::Matrix4d A;
+    const Eigen::Vector4d b(q0[i], v0[i], q1[i], 0.0);
+    if (k[i] * T < 1e-3) {
+      k[i] = 0.0;  // cubic basis 1, t, t^2, t^3
+      A << 1, 0, 0, 0,  //
+          0, 1, 0, 0,   //
+          1, T, T * T, T * T * T, 0, 1, 2 * T, 3 * T * T;
+    } else {
+      const double h = 0.5 * T, ch = std::cosh(k[i] * h), sh = std::sinh(k[i] * h);
+      A << 1, 0, ch, -sh,              //
+          0, 1, -k[i] * sh, k[i] * ch,  //
+          1, T, ch, sh,                 //
+          0, 1, k[i] * sh, k[i] * ch;
+    }
+    c.row(i) = A.colPivHouseholderQr().solve(b).transpose();
+  }
+}
+
+void IlqgPlanner::WarmStartProfile::Eval(double t, Vector6d& q, Vector6d& qd) const {
+  t = std::clamp(t, 0.0, T);
+  for (int i = 0; i < 6; ++i) {
+    if (k[i] == 0.0) {
+      q[i] = c(i, 0) + t * (c(i, 1) + t * (c(i, 2) + t * c(i, 3)));
+      qd[i] = c(i, 1) + t * (2.0 * c(i, 2) + 3.0 * t * c(i, 3));
+    } else {
+      const double tau = t - 0.5 * T, ch = std::cosh(k[i] * tau), sh = std::sinh(k[i] * tau);
+      q[i] = c(i, 0) + c(i, 1) * t + c(i, 2) * ch + c(i, 3) * sh;
+      qd[i] = c(i, 1) + k[i] * (c(i, 2) * sh + c(i, 3) * ch);
+    }
+  }
+}
+
+void IlqgPlanner::FitWarmStart(const Vector6d& q_from, const Vector6d& qd_from, const Vector6d& q_goal, double T) {
+  if (options_.warm_start == IlqgOptions::WarmStart::kQuintic) return;
+  ArmData data;
+  const Vector6d q_mid = 0.5 * (q_from + q_goal);
+  const Vector6d m = MassMatrix<double>(model_, data, q_mid).diagonal();
+  Vector6d k;
+  for (int i = 0; i < 6; ++i) {
+    const double we = options_.effort_weight / (options_.effort_scale[i] * options_.effort_scale[i]);
+    k[i] = we > 0.0 ? std::sqrt(options_.velocity_weight[i] / we) / m[i] : 60.0 / T;
+  }
+  profile_.Fit(q_from, qd_from, q_goal, T, k);
+}
+
+void IlqgPlanner::WarmStartAt(const Vector6d& q_from, const Vector6d& qd_from, const Vector6d& q_goal, double T,
+                              double t, Vector6d& q, Vector6d& qd) const {
+  if (options_.warm_start == IlqgOptions::WarmStart::kQuintic) {
+    Quintic(q_from, qd_from, q_goal, T, t, q, qd);
+  } else {
+    profile_.Eval(t, q, qd);
+  }
+}
+
+namespace {
+}  // namespace
+
 const char* ToString(PlanStatus status) {
   switch (status) {
     case PlanStatus::kConverged: return "converged";
@@ -67,7 +135,7 @@ std::string PlanSummary::BriefReport() const {
 
 IlqgOptions IlqgOptions::FromConfig(const ConfigNode& node, const IlqgOptions& base) {
   node.ExpectMap();
-  node.ExpectKeys({"dt", "duration_per_rad", "min_duration", "warm_start_speed_fraction",
+  node.ExpectKeys({"dt", "duration_per_rad", "min_duration", "warm_start", "warm_start_speed_fraction",
                    "effort_relative_to_gravity", "velocity_weight", "effort_scale", "effort_weight",
                    "terminal_position_weight", "terminal_velocity_weight", "limit_weight",
                    "position_limit_margin", "velocity_limit_fraction", "max_iterations", "tolerance_cost",
@@ -77,6 +145,12 @@ IlqgOptions IlqgOptions::FromConfig(const ConfigNode& node, const IlqgOptions& b
   node.ReadPositive("dt", o.dt);
   node.ReadPositive("duration_per_rad", o.duration_per_rad);
   node.ReadPositive("min_duration", o.min_duration);
+  if (auto w = node.Find("warm_start")) {
+    const std::string v = w->As<std::string>();
+    if (v == "quintic") o.warm_start = WarmStart::kQuintic;
+    else if (v == "lq") o.warm_start = WarmStart::kLq;
+    else w->Fail("quintic or lq");
+  }
   node.ReadInRange("warm_start_speed_fraction", o.warm_start_speed_fraction, 1e-3, 1.0);
   node.Read("effort_relative_to_gravity", o.effort_relative_to_gravity);
   o.velocity_weight = ReadVector6(node, "velocity_weight", o.velocity_weight, false);
@@ -134,16 +208,17 @@ IlqgPlanner::IlqgPlanner(const ArmModel& model, IlqgOptions options)
   effort_weight_ = options_.effort_weight * options_.effort_scale.array().square().inverse().matrix();
 }
 
-double IlqgPlanner::Duration(const Vector6d& q_from, const Vector6d& q_goal, const Vector6d& qd_from) const {
+double IlqgPlanner::Duration(const Vector6d& q_from, const Vector6d& q_goal, const Vector6d& qd_from) {
   // The paper: proportional to the Euclidean norm of the joint change.
   double T = std::max(options_.min_duration, options_.duration_per_rad * (q_goal - q_from).norm());
   // Lengthen if the warm start would come near a speed limit (only for large or fast starts).
   const Vector6d speed_cap = options_.warm_start_speed_fraction * model_.qd_max;
   for (int round = 0; round < 4; ++round) {
+    FitWarmStart(q_from, qd_from, q_goal, T);
     double ratio = 0.0;
     Vector6d q, qd;
     for (int j = 0; j <= 40; ++j) {
-      Quintic(q_from, qd_from, q_goal, T, T * j / 40.0, q, qd);
+      WarmStartAt(q_from, qd_from, q_goal, T, T * j / 40.0, q, qd);
       ratio = std::max(ratio, (qd.cwiseAbs().array() / speed_cap.array()).maxCoeff());
     }
     if (ratio <= 1.0) break;
@@ -222,13 +297,18 @@ double IlqgPlanner::TerminalCost(const Vector12d& x) const {
 }
 
 void IlqgPlanner::WarmStart(const Vector6d& q_from, const Vector6d& qd_from, const Vector6d& q_goal) {
-  // Discrete reference: positions on the quintic, velocities and accelerations as the
-  // semi-implicit Euler step implies them; RNEA gives the controls that reproduce it.
+  // Discrete reference: positions on the profile, velocities and accelerations as the
+  // semi-implicit Euler step implies them; RNEA gives the controls that reproduce it. The
+  // profile is run over the first N - 1 steps so that the last knot repeats the goal: the
+  // discrete trajectory then ends at rest (a profile that brakes late would otherwise leave a
+  // last-step velocity for the terminal cost to punish).
   const double T = dt_ * n_;
+  FitWarmStart(q_from, qd_from, q_goal, T);
+  const double time_scale = static_cast<double>(n_) / (n_ - 1);
   Vector6d q_k = q_from, qd_k = qd_from, q_next, unused;
   for (int k = 0; k < n_; ++k) {
-    Quintic(q_from, qd_from, q_goal, T, dt_ * (k + 1), q_next, unused);
-    if (k + 1 == n_) q_next = q_goal;
+    WarmStartAt(q_from, qd_from, q_goal, T, std::min(T, dt_ * (k + 1) * time_scale), q_next, unused);
+    if (k + 2 >= n_) q_next = q_goal;
     const Vector6d qd_next = (q_next - q_k) / dt_;
     const Vector6d qdd = (qd_next - qd_k) / dt_;
     u_[k] = InverseDynamics<double>(model_, data_, q_k, qd_k, qdd, gravity_dynamics_);

@@ -22,9 +22,10 @@
 /// - Solver: backward pass with the regularisation of Tassa, Erez & Todorov (IROS 2012): mu is
 ///   added to V'_xx (not to Q_uu) and adapted with their quadratic schedule; backtracking line
 ///   search on the feedforward step accepted on the ratio of actual to expected cost reduction.
-/// - Warm start: a quintic (minimum-jerk) joint interpolation whose inverse-dynamics torques
-///   reproduce it exactly under the discrete dynamics, so the first rollout already ends at the
-///   goal and iLQG only reshapes it.
+/// - Warm start: a joint interpolation whose inverse-dynamics torques reproduce it exactly under
+///   the discrete dynamics, so the first rollout already ends at the goal and iLQG only reshapes
+///   it: per joint the optimum of the decoupled problem (warm_start: lq, default) or minimum
+///   jerk (quintic).
 ///
 /// The result is the joint position (and velocity) trajectory for the arm's own controller
 /// (as in the paper), plus the torques and the feedback gains.
@@ -48,6 +49,10 @@ struct IlqgOptions {
   double dt{0.04};                       ///< time step [s]
   double duration_per_rad{0.8};          ///< movement duration per radian of joint change (Euclidean norm) [s/rad]
   double min_duration{0.6};              ///< shortest movement [s]
+  /// Initial trajectory: kQuintic = minimum jerk; kLq = per joint the optimum of the decoupled
+  /// problem (double integrator with the joint's own inertia, same weights), closer to the answer.
+  enum class WarmStart { kQuintic, kLq };
+  WarmStart warm_start{WarmStart::kLq};
   double warm_start_speed_fraction{0.8}; ///< lengthen the movement so the warm start's joint speeds stay below this fraction of the limits
   bool effort_relative_to_gravity{true}; ///< penalise tau - g(q) (true) or tau itself (false)
   Vector6d velocity_weight{Vector6d::Ones()};  ///< w_v: running cost per (rad/s)^2 per second
@@ -136,7 +141,7 @@ class IlqgPlanner {
                const Vector6d& qd_from = Vector6d::Zero());
 
   /// Movement duration the planner uses for this joint change [s].
-  double Duration(const Vector6d& q_from, const Vector6d& q_goal, const Vector6d& qd_from) const;
+  double Duration(const Vector6d& q_from, const Vector6d& q_goal, const Vector6d& qd_from);
 
   const IlqgOptions& options() const { return options_; }
   const ArmModel& model() const { return model_; }
@@ -153,7 +158,18 @@ class IlqgPlanner {
   bool Linearize(const Vector12d& x, const Vector6d& u, double dt, Matrix12d& fx, Matrix12x6d& fu);
 
  private:
+  struct WarmStartProfile {
+    Eigen::Matrix<double, 6, 4> c{Eigen::Matrix<double, 6, 4>::Zero()};
+    Vector6d k{Vector6d::Zero()};
+    double T{1.0};
+    void Fit(const Vector6d& q0, const Vector6d& v0, const Vector6d& q1, double T, const Vector6d& k);
+    void Eval(double t, Vector6d& q, Vector6d& qd) const;
+  };
+
   void Resize(int n);
+  void FitWarmStart(const Vector6d& q_from, const Vector6d& qd_from, const Vector6d& q_goal, double T);
+  void WarmStartAt(const Vector6d& q_from, const Vector6d& qd_from, const Vector6d& q_goal, double T, double t,
+                   Vector6d& q, Vector6d& qd) const;
   void WarmStart(const Vector6d& q_from, const Vector6d& qd_from, const Vector6d& q_goal);
   double RunningCost(const Vector12d& x, const Vector6d& u) const;
   double TerminalCost(const Vector12d& x) const;
@@ -169,6 +185,7 @@ class IlqgPlanner {
   Vector6d soft_q_min_, soft_q_max_, soft_qd_max_;
   Vector6d effort_weight_;             // w_e / s_i^2
 
+  WarmStartProfile profile_;
   int n_{0};
   double dt_{0.0};
   Vector6d q_goal_;

@@ -7,6 +7,7 @@
 #include <map>
 
 #include "ifab/arm/arm_model.h"
+#include "ifab/arm/primitives.h"
 #include "ifab/core/angles.h"
 #include "ifab/core/config.h"
 #include "ifab/core/random.h"
@@ -63,6 +64,16 @@ class CaseGenerator {
     return true;
   }
 
+  // The arm configuration above (lift) or at the feeder's brick, nearest to q_near.
+  bool FeederConfiguration(RandomStream& rng, double lift, const Vector6d& q_near, Vector6d& q, Pose3* T_grip) {
+    const Pose3 T_arm_base_brick = robot_.T_base_arm_base.inverse() * *config_.T_base_feeder_brick;
+    Box brick;
+    brick.size.z() = config_.brick_height;
+    const Pose3 grip = ArmPrimitives::GripperPoseOnBrick(T_arm_base_brick, brick, rng.Bernoulli(0.5));
+    if (T_grip) *T_grip = grip;
+    return Solve(grip, lift, q_near, q);
+  }
+
   bool Make(int index, RandomStream rng, ArmPlanningCase& c) {
     c.index = index;
     const double u = rng.Uniform();
@@ -70,12 +81,15 @@ class CaseGenerator {
     const double a = config_.approach_height;
     const double side = rng.Bernoulli(0.5) ? 1.0 : -1.0;
     const double feeder_lo = DegToRad(50.0), feeder_hi = DegToRad(120.0), stack = DegToRad(45.0);
+    const bool on_board_feeder = config_.T_base_feeder_brick.has_value();
     if (u < config_.transfer_fraction) {
       c.kind = "transfer";
       Vector6d q_feeder, q_stack;
-      if (!TaskConfiguration(rng, side > 0 ? feeder_lo : -feeder_hi, side > 0 ? feeder_hi : -feeder_lo, a, home,
-                             q_feeder))
-        return false;
+      const bool ok = on_board_feeder
+                          ? FeederConfiguration(rng, a, home, q_feeder, nullptr)
+                          : TaskConfiguration(rng, side > 0 ? feeder_lo : -feeder_hi, side > 0 ? feeder_hi : -feeder_lo,
+                                              a, home, q_feeder);
+      if (!ok) return false;
       if (!TaskConfiguration(rng, -stack, stack, a, q_feeder, q_stack)) return false;
       const bool to_stack = rng.Bernoulli(0.5);
       c.q_from = to_stack ? q_feeder : q_stack;
@@ -84,7 +98,11 @@ class CaseGenerator {
       c.kind = "approach";
       Vector6d q_above, q_contact;
       Pose3 grip;
-      if (!TaskConfiguration(rng, -feeder_hi, feeder_hi, a, home, q_above, &grip)) return false;
+      // Half of the descents onto the feeder's brick when it rides on the robot.
+      const bool ok = on_board_feeder && rng.Bernoulli(0.5)
+                          ? FeederConfiguration(rng, a, home, q_above, &grip)
+                          : TaskConfiguration(rng, -feeder_hi, feeder_hi, a, home, q_above, &grip);
+      if (!ok) return false;
       if (!Solve(grip, 0.0, q_above, q_contact)) return false;
       const bool down = rng.Bernoulli(0.5);
       c.q_from = down ? q_above : q_contact;
@@ -134,7 +152,8 @@ ArmPlanningExperimentConfig ArmPlanningExperimentConfig::FromConfig(const Config
                                                                     const ArmPlanningExperimentConfig& base) {
   node.ExpectMap();
   // seed, robot and arm are read by the experiment wrapper (src/ifab/experiments/arm_planning.cc).
-  node.ExpectKeys({"seed", "robot", "arm", "cases", "mix", "workspace", "sweep_deg", "home_deg", "ilqg", "ik"});
+  node.ExpectKeys({"seed", "robot", "robot_yaml", "arm", "cases", "mix", "workspace", "sweep_deg", "home_deg",
+                   "brick_height", "ilqg", "ik"});
   ArmPlanningExperimentConfig c = base;
   node.ReadPositive("cases", c.cases);
   if (auto mix = node.Find("mix")) {
@@ -171,6 +190,7 @@ ArmPlanningExperimentConfig ArmPlanningExperimentConfig::FromConfig(const Config
     const auto v = h->AsNumbers(6);
     for (int i = 0; i < 6; ++i) c.q_home[i] = DegToRad(v[i]);
   }
+  node.ReadPositive("brick_height", c.brick_height);
   if (auto s = node.Find("ilqg")) c.ilqg = IlqgOptions::FromConfig(*s, c.ilqg);
   if (auto s = node.Find("ik")) c.ik = IkOptions::FromConfig(*s);
   return c;

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -34,12 +35,17 @@ struct ArmPlanningExperimentConfig {
   double approach_height{0.15};        ///< approach poses this far above the grip [m]
   double sweep_min_deg{15.0};          ///< scan sweep amplitude range [deg]
   double sweep_max_deg{60.0};
+  /// The on-board feeder's brick (centre, base frame; robot YAML `feeder_in_base`). Without it,
+  /// pick poses are drawn 50-120 deg to either side of the arm.
+  std::optional<Pose3> T_base_feeder_brick;
+  double brick_height{0.052};          ///< [m] (German DF brick)
   Vector6d q_home{(Vector6d() << 0.0, -0.5236, 0.5236, 0.0, 1.5708, 0.0).finished()};  ///< [rad]
   IlqgOptions ilqg;                    ///< planner options
   IkOptions ik;                        ///< IK options for generating the cases
 
-  /// Read the experiment YAML (keys: cases, mix, workspace, sweep_deg, home_deg, ilqg, ik) over
-  /// `base` (whose ilqg options typically come from data/arm/arm.yaml).
+  /// Read the experiment YAML (keys: cases, mix, workspace, sweep_deg, home_deg, brick_height,
+  /// ilqg, ik; seed, robot, robot_yaml and arm are left to the wrapper) over `base` (whose ilqg
+  /// options typically come from data/arm/arm.yaml and feeder from the robot YAML).
   static ArmPlanningExperimentConfig FromConfig(const ConfigNode& node, const ArmPlanningExperimentConfig& base);
 };
 

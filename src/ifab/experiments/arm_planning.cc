@@ -23,6 +23,12 @@ nlohmann::json Run(const RunContext& ctx) {
   const RobotModel robot = LoadRobotModel((dir / c.Get<std::string>("robot")).string());
   arm::ArmPlanningExperimentConfig base;
   base.ilqg = arm::LoadIlqgOptions((dir / c.Get<std::string>("arm")).string());
+  if (auto robot_yaml = c.Find("robot_yaml")) {
+    // The on-board feeder's brick pose (base frame), as the algorithms know it.
+    const ConfigNode r = ConfigNode::LoadFile((dir / robot_yaml->As<std::string>()).string());
+    const auto v = r["feeder_in_base"].AsNumbers(6);
+    base.T_base_feeder_brick = PoseFromXyzRpy(v[0], v[1], v[2], v[3], v[4], v[5]);
+  }
   const arm::ArmPlanningExperimentConfig config = arm::ArmPlanningExperimentConfig::FromConfig(c, base);
   ctx.Progress(fmt::format("arm-planning: {} seeded motions, iLQG on one thread", config.cases));
   const arm::ArmPlanningResult r = arm::RunArmPlanningExperiment(robot, config, ctx.seed);
