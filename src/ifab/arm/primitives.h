@@ -104,6 +104,12 @@ class ArmPrimitives {
   PrimitiveResult PickBrick(const Vector6d& q_current, const Pose3& T_site_base, const Pose3& T_site_brick,
                             const Box& brick);
 
+  /// Pick the brick the on-board feeder presents at T_base_brick (robot YAML feeder_in_base):
+  /// the same sequence in the base frame, independent of where the robot stands.
+  PrimitiveResult PickBrickFromFeeder(const Vector6d& q_current, const Pose3& T_base_brick, const Box& brick) {
+    return PickBrick(q_current, Pose3::Identity(), T_base_brick, brick);
+  }
+
   /// Place the held brick so that its centre lands at T_site_brick_goal: iLQG move above the
   /// goal, descend, release, lift.
   PrimitiveResult PlaceBrick(const Vector6d& q_current, const Pose3& T_site_base, const Pose3& T_site_brick_goal,
