@@ -524,10 +524,10 @@ struct BaseStateEstimator::Impl {
                                  ? o.max_reference_gap_sigmas * LevelSigma(l)
                                  : std::numeric_limits<double>::infinity();
       if (o.interpolate_reference) {
-        Densify(ReferenceSpacing(l), max_gap, o.end_margin_sigmas * LevelSigma(l), &level);
+        Densify(ReferenceSpacing(l), max_gap, o.end_margin_sigmas * o.sigma, &level);
       } else {
         Thin(ReferenceSpacing(l), max_gap, o.max_beams, &level.cloud.points,
-             o.end_margin_sigmas * LevelSigma(l), &level.near_end);
+             o.end_margin_sigmas * o.sigma, &level.near_end);
         ArcLengthWeights(level.cloud.points, ReferenceSpacing(l), max_gap, &level.weight);
         if (o.residual == MatchResidual::kPointToLine) {
           ComputeNormals(&level, std::max(3.0 * ReferenceSpacing(l), 2.0 * LevelSigma(l)));
@@ -621,11 +621,6 @@ struct BaseStateEstimator::Impl {
         level->near_end[k] = (from_start < end_margin || arc - from_start < end_margin) ? 1 : 0;
       }
       i = j;
-    }
-    if (std::getenv("DENSIFY_DEBUG")) {
-      int ends = 0;
-      for (char c : level->near_end) ends += c;
-      std::fprintf(stderr, "densify: valid %zu -> samples %zu near_end %d (spacing %g link %g margin %g)\n", n, pts.size(), ends, spacing, max_link, end_margin);
     }
   }
 

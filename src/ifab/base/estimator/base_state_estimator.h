@@ -1,10 +1,18 @@
 #pragma once
 /// \file
-/// Base state estimator of the paper's section III-B (eq. 1-3): each laser scan (the measurement
-/// scan, rigid at its middle time) is matched against a few earlier reference scans (keyframes
-/// spaced in distance and angle over a receding horizon), fused with the gyro's integrated
-/// rotation, and solved with Ceres (its TinySolver, a dense Levenberg-Marquardt that keeps all
-/// of its memory between solves).
+/// Base state estimator of the paper's section III-B (eq. 1-3). Each laser scan (the
+/// measurement scan, rigid at its middle time) is matched against a few earlier reference scans
+/// (keyframes spaced in distance and angle, kept over a receding time horizon), fused with the
+/// gyro's integrated rotation, and the pose is the Ceres solution of eq. 3 (Ceres' TinySolver,
+/// a dense Levenberg-Marquardt that keeps all of its memory between solves).
+///
+/// Eq. 1 as least squares (kernel_residual.h): each pair contributes 1 - G_ij / G(0) (the
+/// Gaussian kernel G(p_M - p_R, 2 sigma^2 I) normalised to peak 1, subtracted from 1); the
+/// total over a fixed set of pairs is (pairs - sum of eq. 1's kernels), so minimising it is
+/// maximising the paper's score exactly. Eq. 2 adds c_G (theta - theta_gyro)^2. The solver is
+/// given the cost's exact gradient and, per measurement point, the exact Hessian of its kernel
+/// sum projected to be positive semi-definite (see PointKernelSum): that converges in a few
+/// steps and shows a corridor as degenerate.
 ///
 /// Usage:
 ///   BaseStateEstimator estimator(options, T_base_laser);
@@ -14,8 +22,13 @@
 ///
 /// The pose is T_world_base where "world" is whatever frame Reset() was given (the site, on
 /// the robot). No allocation per scan in the steady state: buffers are sized at construction
-/// (from Options::max_beams) and reused; adding a keyframe rebuilds that keyframe's kd-tree,
-/// which does allocate (nanoflann's node pool), once per keyframe.
+/// (from Options::max_beams) and reused (a test counts allocations); adding a keyframe builds
+/// that keyframe's kd-tree (nanoflann's node pool allocates), once per keyframe.
+///
+/// Options marked "improvement" below are off by default (the paper's method as written); the
+/// configs in data/estimator/ say which they switch on and why. Three safeguards are on by
+/// default and can be set to 0 for eq. 1-3 literally: the reference-point filters
+/// max_reference_gap_sigmas and end_margin_sigmas, and the weak prior_weight.
 
 #include <Eigen/Core>
 #include <array>
@@ -70,9 +83,10 @@ struct EstimatorOptions {
 
   // Reference scans (receding horizon of keyframes).
   int num_reference_scans{3};           ///< keyframes matched against (the reference set)
-  /// Keyframes kept (within the horizon); when more than num_reference_scans, each scan is
-  /// matched against the num_reference_scans nearest to its predicted pose, and revisiting a
-  /// place reuses its keyframes instead of adding new ones. 0: keep num_reference_scans.
+  /// Improvement: keyframes kept (within the horizon); when more than num_reference_scans, each
+  /// scan is matched against the num_reference_scans nearest to its predicted pose, and
+  /// revisiting a place reuses its keyframes instead of adding new ones (a keyframe map without
+  /// graph optimisation). 0: keep num_reference_scans (the paper's receding set).
   int keyframe_capacity{0};
   double keyframe_distance{0.15};       ///< [m] a new keyframe when every kept one is this far
   double keyframe_angle_deg{5.0};       ///< [deg] ... or turned this much from the pose
@@ -81,9 +95,9 @@ struct EstimatorOptions {
   double reference_point_spacing{0.04};  ///< [m] spacing of the points kept in a keyframe
   /// Reference points whose nearer neighbour along the scan is farther than this many sigma are
   /// dropped: samples sparser than the kernel (grazing walls, far range, lone mixed pixels)
-  /// make eq. 1 lumpy and pull along walls. 0 keeps every point.
+  /// make eq. 1 lumpy and hold the pose at the reference. 0 keeps every point.
   double max_reference_gap_sigmas{4.0};
-  /// Measurement points whose nearest reference point lies within this many sigma of the end of
+  /// Measurement points whose nearest reference point lies within this many (final) sigma of the end of
   /// its chain (depth jump, occlusion, range or density cut-off) skip that reference: the kernel
   /// sum is one-sided there and would pin the pose to the reference's. 0 keeps every point.
   double end_margin_sigmas{4.0};
@@ -181,6 +195,7 @@ class BaseStateEstimator {
   /// The latest estimate.
   const BaseEstimate& Latest() const { return latest_; }
   const EstimatorOptions& options() const { return options_; }
+  /// Keyframes kept (the candidates of the reference set).
   int NumReferenceScans() const;
 
  private:

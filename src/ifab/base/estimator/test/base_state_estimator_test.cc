@@ -239,6 +239,67 @@ TEST(BaseStateEstimator, TracksADriveThroughTheRoom) {
   EXPECT_LT(AngleDistance(estimator.Latest().T_world_base, truth), DegToRad(0.5));
 }
 
+// Driving along a corridor with a SICK-like scanner (361 beams over 180 deg, 30 m): the far,
+// grazing wall samples are sparse. Matched as raw points they hold the estimate at the
+// reference (the motion is underestimated); sampled as a polyline they do not.
+double CorridorProgress(bool interpolate) {
+  testing::World world = testing::Corridor(1.5, 100.0);
+  world.push_back({{-40.0, -1.5}, {-40.0, 1.5}});  // a wall far behind, so the corridor ends somewhere
+  testing::ScanSpec spec;
+  spec.beams = 361;
+  spec.fov = kPi;
+  spec.range_max = 30.0;
+  spec.sigma = 0.01;
+  EstimatorOptions o;
+  o.sigma = 0.05;
+  o.max_range = 29.0;
+  o.reference_point_spacing = interpolate ? 0.025 : 0.05;
+  o.interpolate_reference = interpolate;
+  o.max_reference_gap_sigmas = 8.0;
+  o.keyframe_distance = 0.3;
+  RandomStream rng(4);
+  BaseStateEstimator estimator(o, Pose2());
+  Pose2 truth(-10.0, 0.0, 0.0);
+  estimator.Reset(truth, 0.0);
+  estimator.AddScan(CastScan(world, truth, 0.0, spec, &rng));
+  for (int k = 1; k <= 20; ++k) {
+    truth = truth * Pose2(0.02, 0.0, 0.0);
+    estimator.AddScan(CastScan(world, truth, 0.2 * k, spec, &rng), Pose2(0.02, 0.0, 0.0));
+  }
+  return estimator.Latest().T_world_base.x - (-10.0);  // truth: 0.4 m
+}
+
+TEST(BaseStateEstimator, InterpolatedReferenceDoesNotHoldTheEstimateInACorridor) {
+  const double raw = CorridorProgress(false);
+  const double interpolated = CorridorProgress(true);
+  EXPECT_LT(raw, 0.3) << "raw sparse samples are expected to hold the estimate back";
+  EXPECT_NEAR(interpolated, 0.4, 0.04);
+}
+
+// With more keyframes kept than matched, driving back over the same ground reuses them.
+TEST(BaseStateEstimator, KeyframeMapReusesKeyframesWhenRevisiting) {
+  const auto world = testing::LRoom();
+  EstimatorOptions o = RobotOptions();
+  o.keyframe_capacity = 50;
+  o.horizon = 1e9;
+  BaseStateEstimator estimator(o, kBaseLaser);
+  Pose2 truth(-1.5, -0.5, 0.0);
+  estimator.Reset(truth, 0.0);
+  estimator.AddScan(ScanAt(world, truth, 0.0));
+  int added_out = 0, added_back = 0;
+  for (int k = 1; k <= 80; ++k) {
+    const double v = k <= 40 ? 0.05 : -0.05;  // 2 m out, 2 m back
+    truth = truth * Pose2(v, 0.0, 0.0);
+    const BaseEstimate& e = estimator.AddScan(ScanAt(world, truth, 0.1 * k));
+    (k <= 40 ? added_out : added_back) += e.keyframe_added ? 1 : 0;
+    ASSERT_TRUE(e.IsUsable()) << k;
+  }
+  EXPECT_GE(added_out, 10);
+  EXPECT_LE(added_back, 1);
+  EXPECT_EQ(estimator.NumReferenceScans(), added_out + 1);
+  EXPECT_LT(TranslationDistance(estimator.Latest().T_world_base, truth), 0.01);
+}
+
 TEST(BaseStateEstimator, ResetKeepingReferencesMovesThemWithThePose) {
   const auto world = testing::LRoom();
   BaseStateEstimator estimator(RobotOptions(), kBaseLaser);
