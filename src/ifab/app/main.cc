@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   int exit_code = 0;
   ifab::app::AddRunCommand(app, exit_code);
   ifab::app::AddRobotCommand(app, exit_code);
+  ifab::app::AddPlanArmCommand(app, exit_code);
 
   try {
     app.parse(argc, argv);

@@ -6,5 +6,6 @@
 namespace ifab::experiments {
 
 ExperimentInfo LrfBiasExperiment();  ///< paper Fig. 7: stationary floor scans from 3 heights
+ExperimentInfo ArmPlanningExperiment();  ///< paper Sec. IV: iLQG on seeded brick and scan motions
 
 }  // namespace ifab::experiments
