@@ -82,7 +82,7 @@ nlohmann::json Run(const RunContext& ctx) {
   parts.base_geometry = base::BaseGeometry::FromConfig(robot_yaml["base"]);
   parts.planner = base::StompPlannerOptions::FromConfig(ConfigNode::LoadFile(Beside(c, "planner"))["planner"]);
   parts.estimator = base::EstimatorOptions::FromConfig(ConfigNode::LoadFile(Beside(c, "estimator"))["estimator"]);
-  parts.controller = base::ControllerOptions::FromConfig(ConfigNode::LoadFile(Beside(c, "controller"))["controller"]);
+  parts.controller = base::BaseControllerOptions::FromConfig(ConfigNode::LoadFile(Beside(c, "controller"))["controller"]);
   parts.arm = arm::ArmOptions::Load(Beside(c, "arm"));
   const ConfigNode perception = ConfigNode::LoadFile(Beside(c, "perception"));
   if (auto a = perception.Find("assembly")) parts.assembly = ScanAssemblyOptions::FromConfig(*a);

@@ -177,7 +177,7 @@ bool Mission::Reposition(const BuildingPosition& goal, VisitLog& log) {
   }
 
   Progress(fmt::format("{}: driving ({:.1f} m planned)", goal.name, log.plan.trajectory.Length()));
-  base::TrajectoryController controller(c_.controller, c_.base_geometry);
+  base::BaseTrajectoryController controller(c_.controller);
   controller.SetTrajectory(log.plan.trajectory);
   const Seconds deadline =
       robot_.Now() + o_.drive_timeout_factor * log.plan.trajectory.duration + o_.drive_timeout_margin;
@@ -186,12 +186,17 @@ bool Mission::Reposition(const BuildingPosition& goal, VisitLog& log) {
   while (robot_.Now() < deadline) {
     robot_.Wait(o_.control_period);
     PumpSensors();
-    const base::ControlOutput u = controller.Update(T_site_base_, robot_.Now());
-    if (u.finished) {
+    const base::BaseControllerOutput u = controller.Update(T_site_base_, robot_.Now());
+    if (u.done) {
       arrived = true;
       break;
     }
-    robot_.CommandTracks(u.command);
+    TrackCommand command;
+    double v = 0, omega = 0;
+    base::BaseTrajectoryController::ToTrackSpeeds(u.v, u.omega, c_.controller.track_gauge,
+                                                  c_.controller.max_track_speed, &v, &omega, &command);
+    command.t = robot_.Now();
+    robot_.CommandTracks(command);
   }
   robot_.CommandTracks({robot_.Now(), 0.0, 0.0});
   for (double t = 0; t < o_.settle_time; t += o_.control_period) {

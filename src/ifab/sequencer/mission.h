@@ -59,7 +59,7 @@ struct MissionComponents {
   base::BaseGeometry base_geometry;
   base::StompPlannerOptions planner;
   base::EstimatorOptions estimator;
-  base::ControllerOptions controller;
+  base::BaseControllerOptions controller;
   arm::ArmOptions arm;
   ScanAssemblyOptions assembly;
   RegistrationOptions registration;
