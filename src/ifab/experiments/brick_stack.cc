@@ -68,8 +68,8 @@ struct Stats {
 nlohmann::json Run(const RunContext& ctx) {
   const auto wall_start = std::chrono::steady_clock::now();
   const ConfigNode& c = *ctx.config;
-  c.ExpectKeys({"seed", "robot", "site", "arm", "estimator", "planner", "controller", "perception", "plan",
-                "mission", "start_joints_deg", "write_clouds"});
+  c.ExpectKeys({"seed", "robot", "site", "arm", "estimator", "planner", "controller", "base", "perception",
+                "plan", "mission", "start_joints_deg", "write_clouds"});
 
   // The simulated machine (truth) and what the stack knows of it (design values, configs).
   const ConfigNode robot_yaml = ConfigNode::LoadFile(Beside(c, "robot"));
@@ -79,10 +79,13 @@ nlohmann::json Run(const RunContext& ctx) {
   sequencer::MissionComponents parts;
   parts.robot = LoadRobotModel(sim_options.urdf);
   parts.site = LoadSite(sim_options.site);
-  parts.base_geometry = base::BaseGeometry::FromConfig(robot_yaml["base"]);
-  parts.planner = base::StompPlannerOptions::FromConfig(ConfigNode::LoadFile(Beside(c, "planner"))["planner"]);
+  parts.base_geometry = base::BaseGeometry::Load(Beside(c, "base"));
+  parts.planner = base::StompPlannerOptions::FromConfig(ConfigNode::LoadFile(Beside(c, "planner"))["base_planner"]);
   parts.estimator = base::EstimatorOptions::FromConfig(ConfigNode::LoadFile(Beside(c, "estimator"))["estimator"]);
-  parts.controller = base::BaseControllerOptions::FromConfig(ConfigNode::LoadFile(Beside(c, "controller"))["controller"]);
+  parts.controller =
+      base::BaseControllerOptions::FromConfig(ConfigNode::LoadFile(Beside(c, "controller"))["base_controller"]);
+  parts.controller.track_gauge = parts.base_geometry.track_gauge;
+  parts.controller.max_track_speed = parts.base_geometry.max_track_speed;
   parts.arm = arm::ArmOptions::Load(Beside(c, "arm"));
   const ConfigNode perception = ConfigNode::LoadFile(Beside(c, "perception"));
   if (auto a = perception.Find("assembly")) parts.assembly = ScanAssemblyOptions::FromConfig(*a);
