@@ -1,0 +1,188 @@
+#include "ifab/model/robot_model.h"
+
+#include <console_bridge/console.h>
+#include <kdl/chainfksolverpos_recursive.hpp>
+#include <urdf_parser/urdf_parser.h>
+
+#include <fstream>
+#include <mutex>
+#include <sstream>
+
+#include "ifab/core/config.h"
+#include "ifab/core/error.h"
+
+namespace ifab {
+namespace {
+
+// urdfdom reports what is wrong through console_bridge; collect it for our error message.
+class CollectingHandler : public console_bridge::OutputHandler {
+ public:
+  void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
+    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_WARN) messages += (messages.empty() ? "" : "; ") + text;
+  }
+  std::string messages;
+};
+
+KDL::Vector ToKdl(const urdf::Vector3& v) { return {v.x, v.y, v.z}; }
+
+KDL::Frame ToKdl(const urdf::Pose& p) {
+  return {KDL::Rotation::Quaternion(p.rotation.x, p.rotation.y, p.rotation.z, p.rotation.w),
+          ToKdl(p.position)};
+}
+
+KDL::Joint ToKdlJoint(const urdf::Joint& j) {
+  const KDL::Frame origin = ToKdl(j.parent_to_joint_origin_transform);
+  switch (j.type) {
+    case urdf::Joint::REVOLUTE:
+    case urdf::Joint::CONTINUOUS:
+      return KDL::Joint(j.name, origin.p, origin.M * ToKdl(j.axis), KDL::Joint::RotAxis);
+    case urdf::Joint::PRISMATIC:
+      return KDL::Joint(j.name, origin.p, origin.M * ToKdl(j.axis), KDL::Joint::TransAxis);
+    default:
+      return KDL::Joint(j.name, KDL::Joint::Fixed);
+  }
+}
+
+KDL::RigidBodyInertia ToKdlInertia(const urdf::Inertial& i) {
+  const KDL::Frame origin = ToKdl(i.origin);
+  const KDL::RigidBodyInertia about_cog(
+      i.mass, origin.p, KDL::RotationalInertia(i.ixx, i.iyy, i.izz, i.ixy, i.ixz, i.iyz));
+  // Inertia axes given in the inertial frame: rotate them into the link frame.
+  return origin.M * about_cog;
+}
+
+void AddChildren(const urdf::LinkConstSharedPtr& link, KDL::Tree& tree) {
+  for (const auto& child : link->child_links) {
+    KDL::RigidBodyInertia inertia = KDL::RigidBodyInertia::Zero();
+    if (child->inertial) inertia = ToKdlInertia(*child->inertial);
+    const urdf::Joint& joint = *child->parent_joint;
+    KDL::Segment segment(child->name, ToKdlJoint(joint), ToKdl(joint.parent_to_joint_origin_transform),
+                         inertia);
+    tree.addSegment(segment, link->name);
+    AddChildren(child, tree);
+  }
+}
+
+Pose3 FixedPose(const KDL::Tree& tree, const std::string& from, const std::string& to,
+                const std::string& path) {
+  KDL::Chain chain;
+  if (!tree.getChain(from, to, chain)) ThrowInputError("{}: no link chain from '{}' to '{}'", path, from, to);
+  KDL::Frame f = KDL::Frame::Identity();
+  for (const auto& s : chain.segments) {
+    if (s.getJoint().getType() != KDL::Joint::Fixed)
+      ThrowInputError("{}: the mount from '{}' to '{}' must use fixed joints only", path, from, to);
+    f = f * s.pose(0.0);
+  }
+  return ToPose3(f);
+}
+
+}  // namespace
+
+Pose3 ToPose3(const KDL::Frame& f) {
+  Pose3 p = Pose3::Identity();
+  for (int r = 0; r < 3; ++r) {
+    p.translation()[r] = f.p[r];
+    for (int c = 0; c < 3; ++c) p.linear()(r, c) = f.M(r, c);
+  }
+  return p;
+}
+
+KDL::Frame ToKdl(const Pose3& p) {
+  const Eigen::Matrix3d& r = p.linear();
+  return {KDL::Rotation(r(0, 0), r(0, 1), r(0, 2), r(1, 0), r(1, 1), r(1, 2), r(2, 0), r(2, 1), r(2, 2)),
+          KDL::Vector(p.translation().x(), p.translation().y(), p.translation().z())};
+}
+
+RobotModel LoadRobotModel(const std::string& urdf_path) {
+  std::ifstream in(urdf_path);
+  if (!in) ThrowInputError("{}: cannot open the file", urdf_path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+
+  urdf::ModelInterfaceSharedPtr urdf_model;
+  {
+    static std::mutex mutex;  // console_bridge's handler is process-global
+    std::lock_guard<std::mutex> lock(mutex);
+    CollectingHandler handler;
+    console_bridge::useOutputHandler(&handler);
+    urdf_model = urdf::parseURDF(ss.str());
+    console_bridge::restorePreviousOutputHandler();
+    if (!urdf_model) {
+      ThrowInputError("{}: not a valid URDF: {}", urdf_path,
+                      handler.messages.empty() ? "the parser gave no reason" : handler.messages);
+    }
+  }
+
+  RobotModel model;
+  model.urdf_path = urdf_path;
+  const auto root = urdf_model->getRoot();
+  if (!root) ThrowInputError("{}: the URDF has no root link", urdf_path);
+  model.tree = KDL::Tree(root->name);
+  AddChildren(root, model.tree);
+
+  for (const char* link : {"base_link", "arm_base", "tool0", "base_laser", "arm_laser", "gripper_tcp"}) {
+    if (!urdf_model->getLink(link)) ThrowInputError("{}: link '{}' is required but missing", urdf_path, link);
+  }
+  if (!model.tree.getChain("arm_base", "tool0", model.arm_chain))
+    ThrowInputError("{}: no chain from 'arm_base' to 'tool0'", urdf_path);
+
+  std::vector<double> lo, hi, vel, eff;
+  for (const auto& segment : model.arm_chain.segments) {
+    if (segment.getJoint().getType() == KDL::Joint::Fixed) continue;
+    const auto joint = urdf_model->getJoint(segment.getJoint().getName());
+    if (joint->type != urdf::Joint::REVOLUTE)
+      ThrowInputError("{}: joint '{}': expected a revolute joint in the arm chain", urdf_path, joint->name);
+    if (!joint->limits)
+      ThrowInputError("{}: joint '{}': expected a <limit> element", urdf_path, joint->name);
+    if (!(joint->limits->lower < joint->limits->upper) || !(joint->limits->velocity > 0.0))
+      ThrowInputError("{}: joint '{}': expected lower < upper and velocity > 0 in <limit>", urdf_path, joint->name);
+    model.joint_names.push_back(joint->name);
+    lo.push_back(joint->limits->lower);
+    hi.push_back(joint->limits->upper);
+    vel.push_back(joint->limits->velocity);
+    eff.push_back(joint->limits->effort);
+  }
+  if (model.joint_names.size() != 6)
+    ThrowInputError("{}: the arm chain arm_base -> tool0 has {} moving joints, expected 6", urdf_path,
+                    model.joint_names.size());
+  for (int i = 0; i < 6; ++i) {
+    model.q_min[i] = lo[i];
+    model.q_max[i] = hi[i];
+    model.qd_max[i] = vel[i];
+    model.effort_max[i] = eff[i];
+  }
+  model.T_base_arm_base = FixedPose(model.tree, "base_link", "arm_base", urdf_path);
+  model.T_base_base_laser = FixedPose(model.tree, "base_link", "base_laser", urdf_path);
+  model.T_tool0_arm_laser = FixedPose(model.tree, "tool0", "arm_laser", urdf_path);
+  model.T_tool0_gripper = FixedPose(model.tree, "tool0", "gripper_tcp", urdf_path);
+  return model;
+}
+
+void ApplyMountOverrides(const ConfigNode& mounts, RobotModel& model) {
+  mounts.ExpectKeys({"base_laser", "arm_laser", "arm_base", "gripper"});
+  auto read = [&](const char* key, Pose3& pose) {
+    if (auto c = mounts.Find(key)) {
+      const auto v = c->AsNumbers(6);
+      pose = PoseFromXyzRpy(v[0], v[1], v[2], v[3], v[4], v[5]);
+    }
+  };
+  read("base_laser", model.T_base_base_laser);
+  read("arm_laser", model.T_tool0_arm_laser);
+  read("arm_base", model.T_base_arm_base);
+  read("gripper", model.T_tool0_gripper);
+}
+
+Pose3 RobotModel::ArmForwardKinematics(const Vector6d& q) const {
+  KDL::ChainFkSolverPos_recursive fk(arm_chain);
+  KDL::JntArray joints(6);
+  for (int i = 0; i < 6; ++i) joints(i) = q[i];
+  KDL::Frame f;
+  fk.JntToCart(joints, f);
+  return ToPose3(f);
+}
+
+bool RobotModel::WithinLimits(const Vector6d& q, double tolerance) const {
+  return ((q - q_min).array() >= -tolerance).all() && ((q_max - q).array() >= -tolerance).all();
+}
+
+}  // namespace ifab
