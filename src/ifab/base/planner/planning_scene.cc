@@ -134,55 +134,111 @@ std::array<Eigen::Vector2d, 4> BaseGeometry::Corners(const Pose2& T_site_base) c
           T_site_base * Eigen::Vector2d(o.x() - hl, o.y() + hw)};
 }
 
+FootprintChecker::Convex FootprintChecker::MakeConvex(const std::vector<Eigen::Vector2d>& v, bool segment) {
+  Convex c;
+  c.vertices = v;
+  c.num_edges = segment ? 1 : static_cast<int>(v.size());
+  for (int i = 0; i < static_cast<int>(v.size()); ++i) {
+    const Eigen::Vector2d d = v[(i + 1) % v.size()] - v[i];
+    c.normals.push_back(Eigen::Vector2d(d.y(), -d.x()).normalized());
+  }
+  for (const auto& p : v) c.centre += p;
+  c.centre /= static_cast<double>(v.size());
+  for (const auto& p : v) c.radius = std::max(c.radius, (p - c.centre).norm());
+  return c;
+}
+
 FootprintChecker::FootprintChecker(PlanningScene scene, BaseGeometry robot)
     : scene_(std::move(scene)), robot_(std::move(robot)) {
   scene_.Validate();
   IFAB_THROW_UNLESS(robot_.length > 0 && robot_.width > 0 && robot_.track_gauge > 0 &&
                         robot_.max_track_speed > 0,
                     "base geometry: expected positive length, width, track gauge and track speed");
-  // Obstacles counter-clockwise, as SignedDistanceConvex expects.
+  hx_ = 0.5 * robot_.length;
+  hy_ = 0.5 * robot_.width;
+  // Obstacles counter-clockwise, as the distance functions expect.
   for (auto& o : scene_.obstacles) {
     if (SignedArea(o) < 0.0) std::reverse(o.begin(), o.end());
+    obstacles_.push_back(MakeConvex(o, false));
   }
   if (scene_.obstacle_names.empty()) {
     for (std::size_t k = 0; k < scene_.obstacles.size(); ++k) {
       scene_.obstacle_names.push_back(fmt::format("obstacle {}", k));
     }
   }
-  for (const auto& o : scene_.obstacles) {
-    Eigen::Vector2d c = Eigen::Vector2d::Zero();
-    for (const auto& v : o) c += v;
-    c /= static_cast<double>(o.size());
-    double r = 0.0;
-    for (const auto& v : o) r = std::max(r, (v - c).norm());
-    obstacle_circles_.push_back({c, r});
-  }
   const std::size_t nb = scene_.boundary.size();
   for (std::size_t i = 0; i < nb; ++i) {
-    const Eigen::Vector2d& a = scene_.boundary[i];
-    const Eigen::Vector2d& b = scene_.boundary[(i + 1) % nb];
-    edge_circles_.push_back({0.5 * (a + b), 0.5 * (b - a).norm()});
+    edges_.push_back(MakeConvex({scene_.boundary[i], scene_.boundary[(i + 1) % nb]}, true));
   }
 }
 
-double FootprintChecker::BoundaryClearance(const std::array<Eigen::Vector2d, 4>& corners,
-                                           const Eigen::Vector2d& c, double cull) const {
-  const std::size_t nb = scene_.boundary.size();
-  if (nb == 0) return kInf;
+FootprintChecker::Box FootprintChecker::MakeBox(const Pose2& T_site_base) const {
+  const double c = std::cos(T_site_base.theta), s = std::sin(T_site_base.theta);
+  const Eigen::Vector2d& o = robot_.footprint_offset;
+  return {Eigen::Vector2d(T_site_base.x + c * o.x() - s * o.y(), T_site_base.y + s * o.x() + c * o.y()), c, s};
+}
+
+// SignedDistanceConvex specialised to the footprint box: the polygon is moved into the box frame,
+// where the box's separating axes and support function are trivial.
+double FootprintChecker::BoxDistance(const Box& box, const Convex& poly, double cull) const {
+  const int m = static_cast<int>(poly.vertices.size());
+  Eigen::Vector2d v[8];
+  std::vector<Eigen::Vector2d> heap;
+  Eigen::Vector2d* vb = v;
+  if (m > 8) {
+    heap.resize(m);
+    vb = heap.data();
+  }
+  double min_x = kInf, max_x = -kInf, min_y = kInf, max_y = -kInf;
+  for (int i = 0; i < m; ++i) {
+    const Eigen::Vector2d d = poly.vertices[i] - box.centre;
+    vb[i] = {box.c * d.x() + box.s * d.y(), -box.s * d.x() + box.c * d.y()};
+    min_x = std::min(min_x, vb[i].x());
+    max_x = std::max(max_x, vb[i].x());
+    min_y = std::min(min_y, vb[i].y());
+    max_y = std::max(max_y, vb[i].y());
+  }
+  // Box axes.
+  double sep = std::max({min_x - hx_, -hx_ - max_x, min_y - hy_, -hy_ - max_y});
+  // Polygon edge normals (a segment has two, opposite).
+  for (int i = 0; i < m; ++i) {
+    const Eigen::Vector2d& n = poly.normals[i];
+    const Eigen::Vector2d nb(box.c * n.x() + box.s * n.y(), -box.s * n.x() + box.c * n.y());
+    sep = std::max(sep, -(std::abs(nb.x()) * hx_ + std::abs(nb.y()) * hy_) - nb.dot(vb[i]));
+  }
+  // Overlapping: minus the penetration depth. Apart by at least cull (sep is a lower bound).
+  if (sep <= 0.0 || sep >= cull) return sep;
+  // Apart: the nearest features are a polygon vertex and the box, or a box corner and an edge.
+  double d2 = kInf;
+  for (int i = 0; i < m; ++i) {
+    const double dx = std::max(std::abs(vb[i].x()) - hx_, 0.0), dy = std::max(std::abs(vb[i].y()) - hy_, 0.0);
+    d2 = std::min(d2, dx * dx + dy * dy);
+  }
+  const Eigen::Vector2d corners[4] = {{-hx_, -hy_}, {hx_, -hy_}, {hx_, hy_}, {-hx_, hy_}};
+  for (int i = 0; i < poly.num_edges; ++i) {
+    const Eigen::Vector2d& a = vb[i];
+    const Eigen::Vector2d ab = vb[(i + 1) % m] - a;
+    const double l2 = ab.squaredNorm();
+    for (const auto& p : corners) {
+      const double t = l2 > 0.0 ? std::clamp((p - a).dot(ab) / l2, 0.0, 1.0) : 0.0;
+      d2 = std::min(d2, (a + t * ab - p).squaredNorm());
+    }
+  }
+  return std::sqrt(d2);
+}
+
+double FootprintChecker::BoundaryClearance(const Box& box, double cull) const {
+  if (edges_.empty()) return kInf;
   const double r = robot_.CircumRadius();
   double d = kInf;
-  for (std::size_t i = 0; i < nb; ++i) {
-    const Circle& ec = edge_circles_[i];
-    if ((c - ec.centre).norm() - ec.radius - r >= cull) continue;
-    const Eigen::Vector2d seg[2] = {scene_.boundary[i], scene_.boundary[(i + 1) % nb]};
-    d = std::min(d, SignedDistanceConvex(corners.data(), 4, seg, 2));
+  for (const Convex& e : edges_) {
+    if ((box.centre - e.centre).norm() - e.radius - r >= cull) continue;
+    d = std::min(d, BoxDistance(box, e, cull));
   }
-  if (d > 0.0 && !PointInPolygon(scene_.boundary, c)) {
+  if (d > 0.0 && !PointInPolygon(scene_.boundary, box.centre)) {
     // Entirely outside: the farther out, the worse.
     double out = kInf;
-    for (std::size_t i = 0; i < nb; ++i) {
-      out = std::min(out, PointSegmentDistance(c, scene_.boundary[i], scene_.boundary[(i + 1) % nb]));
-    }
+    for (const Convex& e : edges_) out = std::min(out, PointSegmentDistance(box.centre, e.vertices[0], e.vertices[1]));
     return -std::max(out, 1e-6);
   }
   return d;
@@ -191,13 +247,11 @@ double FootprintChecker::BoundaryClearance(const std::array<Eigen::Vector2d, 4>&
 double FootprintChecker::Clearance(const Pose2& T_site_base) const { return Clearance(T_site_base, nullptr); }
 
 double FootprintChecker::Clearance(const Pose2& T_site_base, std::string* closest) const {
-  const auto corners = robot_.Corners(T_site_base);
-  const Eigen::Vector2d c = T_site_base * robot_.footprint_offset;
-  double d = BoundaryClearance(corners, c, kInf);
+  const Box box = MakeBox(T_site_base);
+  double d = BoundaryClearance(box, kInf);
   if (closest) *closest = "boundary";
-  for (std::size_t k = 0; k < scene_.obstacles.size(); ++k) {
-    const auto& o = scene_.obstacles[k];
-    const double dk = SignedDistanceConvex(corners.data(), 4, o.data(), static_cast<int>(o.size()));
+  for (std::size_t k = 0; k < obstacles_.size(); ++k) {
+    const double dk = BoxDistance(box, obstacles_[k], kInf);
     if (dk < d) {
       d = dk;
       if (closest) *closest = scene_.obstacle_names[k];
@@ -207,20 +261,17 @@ double FootprintChecker::Clearance(const Pose2& T_site_base, std::string* closes
 }
 
 double FootprintChecker::Cost(const Pose2& T_site_base, double margin, double collision_penalty) const {
-  const auto corners = robot_.Corners(T_site_base);
-  const Eigen::Vector2d c = T_site_base * robot_.footprint_offset;
+  const Box box = MakeBox(T_site_base);
   const double r = robot_.CircumRadius();
   double cost = 0.0;
   const auto add = [&](double d) {
     if (d < margin) cost += margin - d;
     if (d < 0.0) cost += collision_penalty;
   };
-  add(BoundaryClearance(corners, c, margin));
-  for (std::size_t k = 0; k < scene_.obstacles.size(); ++k) {
-    const Circle& oc = obstacle_circles_[k];
-    if ((c - oc.centre).norm() - oc.radius - r >= margin) continue;
-    const auto& o = scene_.obstacles[k];
-    add(SignedDistanceConvex(corners.data(), 4, o.data(), static_cast<int>(o.size())));
+  add(BoundaryClearance(box, margin));
+  for (const Convex& o : obstacles_) {
+    if ((box.centre - o.centre).norm() - o.radius - r >= margin) continue;
+    add(BoxDistance(box, o, margin));
   }
   return cost;
 }
@@ -230,12 +281,9 @@ bool FootprintChecker::CentreInsideBoundary(const Pose2& T_site_base) const {
 }
 
 int FootprintChecker::OverlappingObstacle(const Pose2& T_site_base) const {
-  const auto corners = robot_.Corners(T_site_base);
-  for (std::size_t k = 0; k < scene_.obstacles.size(); ++k) {
-    const auto& o = scene_.obstacles[k];
-    if (SignedDistanceConvex(corners.data(), 4, o.data(), static_cast<int>(o.size())) < 0.0) {
-      return static_cast<int>(k);
-    }
+  const Box box = MakeBox(T_site_base);
+  for (std::size_t k = 0; k < obstacles_.size(); ++k) {
+    if (BoxDistance(box, obstacles_[k], 0.0) < 0.0) return static_cast<int>(k);
   }
   return -1;
 }

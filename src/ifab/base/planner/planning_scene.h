@@ -83,17 +83,31 @@ class FootprintChecker {
   const BaseGeometry& robot() const { return robot_; }
 
  private:
-  struct Circle {
-    Eigen::Vector2d centre;
-    double radius;
+  // A convex polygon (or a segment: two vertices, one edge) with outward unit edge normals and a
+  // bounding circle, all in the site frame.
+  struct Convex {
+    std::vector<Eigen::Vector2d> vertices;
+    std::vector<Eigen::Vector2d> normals;  // normals[i] of edge vertices[i] -> vertices[i+1]
+    int num_edges{0};
+    Eigen::Vector2d centre{0, 0};
+    double radius{0.0};
   };
-  double BoundaryClearance(const std::array<Eigen::Vector2d, 4>& corners, const Eigen::Vector2d& c,
-                           double cull) const;
+  // The footprint at one pose: centre and rotation of the box.
+  struct Box {
+    Eigen::Vector2d centre;
+    double c, s;
+  };
+  Box MakeBox(const Pose2& T_site_base) const;
+  // Signed distance; when it is at least `cull`, a lower bound >= cull may be returned instead.
+  double BoxDistance(const Box& box, const Convex& poly, double cull) const;
+  double BoundaryClearance(const Box& box, double cull) const;
+  static Convex MakeConvex(const std::vector<Eigen::Vector2d>& vertices, bool segment);
 
   PlanningScene scene_;
   BaseGeometry robot_;
-  std::vector<Circle> obstacle_circles_;
-  std::vector<Circle> edge_circles_;  // boundary edges
+  double hx_{0.9}, hy_{0.6};      // footprint half extents
+  std::vector<Convex> obstacles_;  // counter-clockwise
+  std::vector<Convex> edges_;      // boundary edges as segments
 };
 
 }  // namespace ifab::base

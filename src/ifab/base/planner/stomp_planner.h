@@ -42,7 +42,10 @@ struct StompPhaseOptions {
   double noise_decay{0.95};      ///< noise std-dev factor per iteration
   double min_noise_fraction{0.1};  ///< noise never decays below this fraction of the start
   bool hold_noise_until_valid{true};  ///< decay the noise only while the trajectory is valid
-  int cost_window{0};  ///< rollouts weighted by the cost of time steps i +- this (0: step i, as STOMP)
+  /// Rollouts are weighted per time step i by the cost of steps i +- cost_window (0: step i alone,
+  /// as STOMP). In phase 2 a window can help: constrained noise acts non-locally (a heading change
+  /// moves every later point).
+  int cost_window{0};
   double convergence_tolerance{0.01};  ///< stop when valid and the cost improves less than this (relative)
 };
 
@@ -76,9 +79,7 @@ struct StompPlannerOptions {
   double reachability_cell{0.1};   ///< grid cell size of the reachability check [m]
   int num_threads{0};              ///< threads for the rollouts; 0 = oneTBB default, 1 = serial
   StompPhaseOptions phase1{60, 3, 0.4, 0.4, 0.95, 0.1, true, 0, 1.0};    ///< ignores the non-holonomic constraint
-  /// Phase 2 enforces it. Its rollouts are weighted by the whole trajectory's cost: constrained
-  /// noise acts non-locally (a heading change moves every later point).
-  StompPhaseOptions phase2{80, 5, 0.15, 0.25, 0.95, 0.1, true, 1000, 0.01};
+  StompPhaseOptions phase2{80, 5, 0.15, 0.25, 0.95, 0.1, true, 0, 0.01};  ///< enforces it
 
   /// Read a `base_planner` YAML section; fields not named keep their defaults.
   static StompPlannerOptions FromConfig(const ConfigNode& node);

@@ -1,9 +1,11 @@
 #pragma once
 /// \file
-/// Test and benchmark fixture: the brick-stacking site of the paper (Sec. VI, Fig. 5/6) as a
-/// planning scene, until the site model (data/sites/brick_stack.yaml) provides it. Site frame
-/// origin at the brick stack. Numbers are estimates read off the paper's figures.
+/// Test and benchmark fixture: the brick-stacking site (paper Sec. VI, Fig. 5/6) as a planning
+/// scene, written out by hand so that planner tests need not load the site model. It mirrors
+/// data/sites/brick_stack.yaml (site_scene_test checks that they agree). Site frame origin at the
+/// brick stack.
 
+#include <cmath>
 #include <vector>
 
 #include "ifab/base/planner/planning_scene.h"
@@ -16,12 +18,31 @@ inline std::vector<Eigen::Vector2d> Rectangle(double cx, double cy, double sx, d
   return {{cx - sx / 2, cy - sy / 2}, {cx + sx / 2, cy - sy / 2}, {cx + sx / 2, cy + sy / 2}, {cx - sx / 2, cy + sy / 2}};
 }
 
-/// 8 x 6 m boundary, the brick stack (0.24 x 0.115 m) at the origin, the feeder (0.6 x 0.4 m) at (0, -2.2).
+/// Rectangle of size (sx, sy) centred at (cx, cy) and turned by yaw, counter-clockwise.
+inline std::vector<Eigen::Vector2d> RotatedRectangle(double cx, double cy, double sx, double sy, double yaw) {
+  std::vector<Eigen::Vector2d> r = Rectangle(0, 0, sx, sy);
+  const double c = std::cos(yaw), s = std::sin(yaw);
+  for (auto& p : r) p = Eigen::Vector2d(cx + c * p.x() - s * p.y(), cy + s * p.x() + c * p.y());
+  return r;
+}
+
+/// 9 x 7 m lab bay, two pillars, a cabinet and a crate near the walls, the brick stack
+/// (0.24 x 0.115 m) at the origin.
 inline PlanningScene BrickStackingScene() {
   PlanningScene s;
-  s.boundary = Rectangle(0.0, 0.0, 8.0, 6.0);
-  s.obstacles = {Rectangle(0.0, 0.0, 0.24, 0.115), Rectangle(0.0, -2.2, 0.6, 0.4)};
-  s.obstacle_names = {"brick stack", "brick feeder"};
+  s.boundary = Rectangle(0.0, 0.0, 9.0, 7.0);
+  s.obstacles = {Rectangle(-3.2, 2.2, 0.4, 0.4), Rectangle(3.3, -2.4, 0.4, 0.4), Rectangle(2.6, 3.0, 1.2, 0.5),
+                 RotatedRectangle(-3.6, -2.6, 0.8, 0.8, 0.3), Rectangle(0.0, 0.0, 0.24, 0.115)};
+  s.obstacle_names = {"pillar_a", "pillar_b", "cabinet", "crate", "brick stack"};
+  return s;
+}
+
+/// BrickStackingScene with a site-fixed brick feeder (0.6 x 0.4 m at (0, -2.2)) next to the
+/// building positions: a harder scene, where some poses leave no room to turn on the spot.
+inline PlanningScene BrickStackingSceneWithFeeder() {
+  PlanningScene s = BrickStackingScene();
+  s.obstacles.push_back(Rectangle(0.0, -2.2, 0.6, 0.4));
+  s.obstacle_names.push_back("brick feeder");
   return s;
 }
 
