@@ -7,5 +7,6 @@ namespace ifab::experiments {
 
 ExperimentInfo LrfBiasExperiment();  ///< paper Fig. 7: stationary floor scans from 3 heights
 ExperimentInfo ArmPlanningExperiment();  ///< paper Sec. IV: iLQG on seeded brick and scan motions
+ExperimentInfo BasePlanningExperiment();  ///< paper Sec. III-A: STOMP on seeded start/goal poses
 
 }  // namespace ifab::experiments

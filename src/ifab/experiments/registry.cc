@@ -8,6 +8,7 @@ const std::vector<ExperimentInfo>& Registry() {
   static const std::vector<ExperimentInfo> registry = {
       LrfBiasExperiment(),
       ArmPlanningExperiment(),
+      BasePlanningExperiment(),
   };
   return registry;
 }

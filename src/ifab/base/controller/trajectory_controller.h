@@ -24,6 +24,7 @@
 #include <optional>
 
 #include "ifab/base/planner/base_trajectory.h"
+#include "ifab/base/planner/planning_scene.h"
 #include "ifab/core/config.h"
 #include "ifab/core/se2.h"
 #include "ifab/msgs/msgs.h"
@@ -45,6 +46,12 @@ struct BaseControllerOptions {
 
   /// Read a `base_controller` YAML section; fields not named keep their defaults.
   static BaseControllerOptions FromConfig(const ConfigNode& node);
+  /// Take the track gauge and the track speed limit from the robot's base geometry.
+  BaseControllerOptions& SetTracks(const BaseGeometry& robot) {
+    track_gauge = robot.track_gauge;
+    max_track_speed = robot.max_track_speed;
+    return *this;
+  }
 };
 
 /// What one update computed (for logging and tests).

@@ -52,6 +52,9 @@ const char* PlanStatusName(PlanStatus s) {
 }
 
 std::string PlanResult::BriefReport() const {
+  if (iterations == 0 && trajectory.empty()) {
+    return fmt::format("STOMP base planner: {} ({}), {:.1f} ms", PlanStatusName(status), message, seconds * 1e3);
+  }
   return fmt::format(
       "STOMP base planner: {} ({}); iterations {} (phase 1: {}, phase 2: {}), cost {:.4g}, {:.1f} ms; "
       "min clearance {:.3f} m, max lateral velocity {:.2e} m/s, max track speed {:.3f} m/s, "

@@ -7,6 +7,7 @@
 
 #include "ifab/base/planner/stomp_planner.h"
 #include "ifab/core/angles.h"
+#include "ifab/core/data_path.h"
 #include "ifab/core/error.h"
 #include "../../planner/test/brick_stacking_scene.h"
 
@@ -102,6 +103,27 @@ TEST(BaseControllerOptions, ReadsYaml) {
   EXPECT_EQ(o.max_track_speed, BaseControllerOptions{}.max_track_speed);
   EXPECT_THROW(BaseControllerOptions::FromConfig(ConfigNode::FromString("p_tt: 1\n")), InputError);
   EXPECT_THROW(BaseControllerOptions::FromConfig(ConfigNode::FromString("max_track_speed: 0\n")), InputError);
+}
+
+TEST(BaseControllerOptions, ShippedYamlHoldsTheDefaultsAndTracksComeFromTheRobot) {
+  BaseControllerOptions o =
+      BaseControllerOptions::FromConfig(ConfigNode::LoadFile(DataPath("base/controller.yaml"))["base_controller"]);
+  const BaseControllerOptions d;
+  EXPECT_EQ(o.p_t, d.p_t);
+  EXPECT_EQ(o.p_theta, d.p_theta);
+  EXPECT_EQ(o.goal_tolerance_xy, d.goal_tolerance_xy);
+  EXPECT_EQ(o.goal_tolerance_theta, d.goal_tolerance_theta);
+  EXPECT_EQ(o.heading_scale, d.heading_scale);
+  EXPECT_EQ(o.search_ahead, d.search_ahead);
+  EXPECT_EQ(o.search_behind, d.search_behind);
+  EXPECT_EQ(o.end_approach_gain, d.end_approach_gain);
+  EXPECT_EQ(o.min_end_speed, d.min_end_speed);
+  BaseGeometry robot;
+  robot.track_gauge = 1.1;
+  robot.max_track_speed = 0.25;
+  o.SetTracks(robot);
+  EXPECT_EQ(o.track_gauge, 1.1);
+  EXPECT_EQ(o.max_track_speed, 0.25);
 }
 
 TEST(BaseTrajectoryController, TrackSpeedsReduceTheLinearSpeedFirst) {

@@ -8,6 +8,7 @@
 #include "brick_stacking_scene.h"
 #include "ifab/base/planner/planning_experiment.h"
 #include "ifab/core/angles.h"
+#include "ifab/core/data_path.h"
 #include "ifab/core/error.h"
 
 namespace ifab::base {
@@ -61,6 +62,49 @@ TEST(StompPlannerOptions, ReadsYamlAndRejectsNonsense) {
   std::string why;
   EXPECT_FALSE(bad.IsValid(&why));
   EXPECT_THROW(MakePlanner(bad), InputError);
+}
+
+// data/base/planner.yaml documents the defaults: it must parse and agree with them.
+TEST(StompPlannerOptions, ShippedYamlHoldsTheDefaults) {
+  const StompPlannerOptions o =
+      StompPlannerOptions::FromConfig(ConfigNode::LoadFile(DataPath("base/planner.yaml"))["base_planner"]);
+  const StompPlannerOptions d;
+  EXPECT_EQ(o.num_time_steps, d.num_time_steps);
+  EXPECT_EQ(o.num_rollouts, d.num_rollouts);
+  EXPECT_EQ(o.num_reused_rollouts, d.num_reused_rollouts);
+  EXPECT_EQ(o.exponent_h, d.exponent_h);
+  EXPECT_EQ(o.smoothness.acceleration, d.smoothness.acceleration);
+  EXPECT_EQ(o.smoothness.jerk, d.smoothness.jerk);
+  EXPECT_EQ(o.smoothness.heading_scale, d.smoothness.heading_scale);
+  EXPECT_EQ(o.obstacle_weight, d.obstacle_weight);
+  EXPECT_EQ(o.obstacle_margin, d.obstacle_margin);
+  EXPECT_EQ(o.collision_penalty, d.collision_penalty);
+  EXPECT_EQ(o.obstacle_substeps, d.obstacle_substeps);
+  EXPECT_EQ(o.obstacle_substep_length, d.obstacle_substep_length);
+  EXPECT_EQ(o.required_clearance, d.required_clearance);
+  EXPECT_EQ(o.phase1_clearance, d.phase1_clearance);
+  EXPECT_EQ(o.collision_check_step, d.collision_check_step);
+  EXPECT_EQ(o.duration_slack, d.duration_slack);
+  EXPECT_EQ(o.track_speed_fraction, d.track_speed_fraction);
+  EXPECT_EQ(o.constraint_tolerance, d.constraint_tolerance);
+  EXPECT_EQ(o.constraint_projection_steps, d.constraint_projection_steps);
+  EXPECT_EQ(o.constraint_damping, d.constraint_damping);
+  EXPECT_EQ(o.phase2_initialization, d.phase2_initialization);
+  EXPECT_EQ(o.phase2_attempts, d.phase2_attempts);
+  EXPECT_EQ(o.check_reachability, d.check_reachability);
+  EXPECT_EQ(o.reachability_cell, d.reachability_cell);
+  EXPECT_EQ(o.num_threads, d.num_threads);
+  for (const auto& [p, q] : {std::pair{o.phase1, d.phase1}, std::pair{o.phase2, d.phase2}}) {
+    EXPECT_EQ(p.max_iterations, q.max_iterations);
+    EXPECT_EQ(p.min_iterations, q.min_iterations);
+    EXPECT_EQ(p.noise_stddev_xy, q.noise_stddev_xy);
+    EXPECT_EQ(p.noise_stddev_theta, q.noise_stddev_theta);
+    EXPECT_EQ(p.noise_decay, q.noise_decay);
+    EXPECT_EQ(p.min_noise_fraction, q.min_noise_fraction);
+    EXPECT_EQ(p.hold_noise_until_valid, q.hold_noise_until_valid);
+    EXPECT_EQ(p.cost_window, q.cost_window);
+    EXPECT_EQ(p.convergence_tolerance, q.convergence_tolerance);
+  }
 }
 
 TEST(StompBasePlanner, EstimatesDurationFromDistanceTurnAndTrackSpeed) {
