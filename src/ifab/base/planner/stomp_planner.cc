@@ -68,7 +68,7 @@ StompPlannerOptions StompPlannerOptions::FromConfig(const ConfigNode& node) {
   StompPlannerOptions o;
   node.ExpectKeys({"num_time_steps", "num_rollouts", "num_reused_rollouts", "exponent_h", "acceleration_weight",
                    "jerk_weight", "heading_scale", "obstacle_weight", "obstacle_margin", "collision_penalty", "obstacle_substeps", "obstacle_substep_length",
-                   "required_clearance", "phase1_clearance", "collision_check_step", "duration_slack", "track_speed_fraction",
+                   "required_clearance", "phase1_clearance", "collision_check_step", "duration_slack", "track_speed_fraction", "per_segment_timing",
                    "constraint_tolerance", "constraint_projection_steps", "constraint_damping",
                    "phase2_initialization", "phase2_attempts", "check_reachability", "reachability_cell", "num_threads", "phase1",
                    "phase2"});
@@ -89,6 +89,7 @@ StompPlannerOptions StompPlannerOptions::FromConfig(const ConfigNode& node) {
   node.ReadPositive("collision_check_step", o.collision_check_step);
   node.ReadPositive("duration_slack", o.duration_slack);
   node.ReadInRange("track_speed_fraction", o.track_speed_fraction, 0.01, 1.0);
+  node.Read("per_segment_timing", o.per_segment_timing);
   node.ReadPositive("constraint_tolerance", o.constraint_tolerance);
   node.ReadNonNegative("constraint_projection_steps", o.constraint_projection_steps);
   node.ReadNonNegative("constraint_damping", o.constraint_damping);
@@ -604,29 +605,35 @@ BaseTrajectory StompBasePlanner::ToBaseTrajectory(const TrajectoryMatrix& q, dou
     w[j] = q(j + 1, 2) - q(j, 2);
     worst_track = std::max(worst_track, std::abs(v[j]) + half_gauge * std::abs(w[j]));
   }
-  // Stretch the estimated duration if a track would exceed the planning speed.
+  // The estimated duration spread evenly over the segments, stretched where a track would exceed
+  // the planning speed: all segments (uniform timing) or just that one (per-segment timing, the
+  // controller follows the poses, not the clock).
   const double v_plan = options_.track_speed_fraction * checker_.robot().max_track_speed;
-  double dt = duration / segments;
-  dt = std::max(dt, worst_track / v_plan);
+  const double dt_nominal = duration / segments;
+  std::vector<double> dt(segments, std::max(dt_nominal, worst_track / v_plan));
+  if (options_.per_segment_timing) {
+    for (int j = 0; j < segments; ++j) {
+      dt[j] = std::max(dt_nominal, (std::abs(v[j]) + half_gauge * std::abs(w[j])) / v_plan);
+    }
+  }
   BaseTrajectory out;
-  out.duration = dt * segments;
   out.points.resize(q.rows());
   *max_lateral = 0.0;
-  for (int j = 0; j < segments; ++j) *max_lateral = std::max(*max_lateral, std::abs(lat[j]) / dt);
-  *max_track = worst_track / dt;
+  *max_track = 0.0;
+  for (int j = 0; j < segments; ++j) {
+    out.duration += dt[j];
+    v[j] /= dt[j];
+    w[j] /= dt[j];
+    *max_lateral = std::max(*max_lateral, std::abs(lat[j]) / dt[j]);
+    *max_track = std::max(*max_track, std::abs(v[j]) + half_gauge * std::abs(w[j]));
+  }
   for (int i = 0; i <= segments; ++i) {
     BaseTrajectory::Point& p = out.points[i];
     p.pose = Pose2(q(i, 0), q(i, 1), WrapAngle(q(i, 2)));
-    if (i == 0) {
-      p.v = v[0] / dt;
-      p.omega = w[0] / dt;
-    } else if (i == segments) {
-      p.v = v[segments - 1] / dt;
-      p.omega = w[segments - 1] / dt;
-    } else {
-      p.v = 0.5 * (v[i - 1] + v[i]) / dt;
-      p.omega = 0.5 * (w[i - 1] + w[i]) / dt;
-    }
+    // Nominal velocities at a pose: those of the segments on either side, averaged.
+    const int a = std::max(i - 1, 0), b = std::min(i, segments - 1);
+    p.v = 0.5 * (v[a] + v[b]);
+    p.omega = 0.5 * (w[a] + w[b]);
   }
   return out;
 }

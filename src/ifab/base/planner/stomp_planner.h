@@ -65,6 +65,9 @@ struct StompPlannerOptions {
   double collision_check_step{0.02};  ///< max footprint travel [m] between dense collision checks
   double duration_slack{1.3};      ///< duration estimate factor over distance / speed
   double track_speed_fraction{0.8};  ///< plan nominal track speeds at this fraction of the limit
+  /// Segments that would exceed that speed at the estimated duration are slowed down alone (true)
+  /// or the whole trajectory is (false: uniform timing).
+  bool per_segment_timing{true};
   double constraint_tolerance{1e-3};  ///< max sideways displacement per time step [m] in phase 2
   int constraint_projection_steps{10};  ///< Gauss-Newton steps onto the constraints at phase-2 start
   double constraint_damping{1e-6};  ///< relative damping of C Sigma C^T
