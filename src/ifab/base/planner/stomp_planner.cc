@@ -1,7 +1,6 @@
 #include "ifab/base/planner/stomp_planner.h"
 
 #include <fmt/format.h>
-#include <fmt/ranges.h>
 #include <oneapi/tbb/parallel_for.h>
 #include <oneapi/tbb/task_arena.h>
 
@@ -295,12 +294,12 @@ bool StompBasePlanner::IsReachable(const Pose2& start, const Pose2& goal) const 
   return a < 0 || b < 0 || a == b;
 }
 
-bool StompBasePlanner::ProjectOntoConstraints(TrajectoryMatrix* q, Workspace* ws, int steps) const {
+bool StompBasePlanner::ProjectOntoConstraints(TrajectoryMatrix* q, Workspace* ws, int steps, double target) const {
   const int n = n_;
   Eigen::VectorXd r = LateralResiduals(*q);
   double err = r.cwiseAbs().maxCoeff();
   TrajectoryMatrix corr(n, 3);
-  for (int it = 0; it < steps && err > 0.1 * options_.constraint_tolerance; ++it) {
+  for (int it = 0; it < steps && err > target; ++it) {
     ws->projector.Linearize(*q);
     corr.setZero();
     ws->projector.Project(&corr, &r);  // corr = -Sigma C^T K^-1 r
@@ -420,38 +419,24 @@ int StompBasePlanner::RunPhase(int phase, TrajectoryMatrix* q, const RandomStrea
       dtilde += ws->eps[k].cwiseProduct(ws->weights.col(k).head(n).replicate(1, 3));
     }
     TrajectoryMatrix delta = M_ * dtilde;
-    if (spdlog::should_log(spdlog::level::trace)) {
-      Eigen::Index imax;
-      delta.rowwise().norm().maxCoeff(&imax);
-      spdlog::trace("  dtilde max {:.3f}, delta max {:.3f} at {} ({:.3f} {:.3f} {:.3f}); weights at it: {}", dtilde.cwiseAbs().maxCoeff(),
-                    delta.cwiseAbs().maxCoeff(), imax, delta(imax, 0), delta(imax, 1), delta(imax, 2),
-                    fmt::join(ws->weights.row(imax).head(total).eval(), ","));
-    }
     if (constrained) ws->projector.Project(&delta);
     q->middleRows(1, n) += delta;
     if (constrained) {
-      // Second-order drift off the constraints: one Gauss-Newton step back, then re-linearise for
-      // the next iteration's noise.
+      // Second-order drift off the constraints: one Gauss-Newton step back (the next iteration's
+      // noise is conditioned on the constraints linearised at the result, below).
       ws->projector.Linearize(*q);
       const Eigen::VectorXd r = LateralResiduals(*q);
       TrajectoryMatrix corr = TrajectoryMatrix::Zero(n, 3);
       ws->projector.Project(&corr, &r);
       q->middleRows(1, n) += corr;
-      ws->projector.Linearize(*q);
     }
     // 4. Cost of the new trajectory; keep the best (valid first).
     PointCosts(*q, &point_cost);
     const double new_cost = point_cost.sum();
     const bool valid = is_valid(*q);
     if (spdlog::should_log(spdlog::level::trace)) {
-      double dmin = kInf;
-      int imin = -1;
-      for (int i = 0; i < n + 2; ++i) {
-        const double d = checker_.Clearance(Pose2((*q)(i, 0), (*q)(i, 1), (*q)(i, 2)));
-        if (d < dmin) { dmin = d; imin = i; }
-      }
-      spdlog::trace("phase {} it {}: cost {:.4g}, valid {}, sigma {:.3f}, min point clearance {:.3f} at {} ({:.2f}, {:.2f}, {:.2f})",
-                    phase, it, new_cost, valid, sigma[0], dmin, imin, (*q)(imin, 0), (*q)(imin, 1), (*q)(imin, 2));
+      spdlog::trace("stomp phase {} iteration {}: cost {:.4g}, valid {}, noise {:.3f} m, clearance {:.3f} m", phase,
+                    it, new_cost, valid, sigma[0], DenseClearance(*q));
     }
     if ((valid && !best_valid) || (valid == best_valid && new_cost < best_cost)) {
       best = *q;
@@ -473,14 +458,12 @@ int StompBasePlanner::RunPhase(int phase, TrajectoryMatrix* q, const RandomStrea
       const int keep = std::min(options_.num_reused_rollouts, total);
       std::partial_sort(ws->order.begin(), ws->order.begin() + keep, ws->order.end(),
                         [&](int a, int b) { return ws->total[a] < ws->total[b]; });
-      std::vector<TrajectoryMatrix> kept;
-      std::vector<Eigen::VectorXd> kept_cost;
+      ws->reused.resize(keep);
+      ws->reused_cost.resize(keep);
       for (int r = 0; r < keep; ++r) {
-        kept.push_back(ws->traj[ws->order[r]]);
-        kept_cost.push_back(ws->cost[ws->order[r]]);
+        ws->reused[r] = ws->traj[ws->order[r]];  // same sizes: no allocation after the first time
+        ws->reused_cost[r] = ws->cost[ws->order[r]];
       }
-      ws->reused = std::move(kept);
-      ws->reused_cost = std::move(kept_cost);
     }
     // Exploration narrows only once the trajectory is valid; until then it keeps searching wide.
     if (valid || !po.hold_noise_until_valid) sigma = (sigma * po.noise_decay).cwiseMax(sigma_min);
@@ -725,7 +708,7 @@ PlanResult StompBasePlanner::Plan(const Pose2& start, const Pose2& goal, const R
                      options_.constraint_damping);
   std::vector<double> candidate_cost;
   for (auto& c : candidates) {
-    ProjectOntoConstraints(&c, &ws, options_.constraint_projection_steps);
+    ProjectOntoConstraints(&c, &ws, options_.constraint_projection_steps, 0.1 * options_.constraint_tolerance);
     PointCosts(c, &point_cost_buffer);
     candidate_cost.push_back(point_cost_buffer.sum());
   }
@@ -740,7 +723,8 @@ PlanResult StompBasePlanner::Plan(const Pose2& start, const Pose2& goal, const R
     spdlog::debug("stomp phase 2 attempt {} start: cost {:.4g}, clearance {:.3f} m, sideways {:.2e} m", a,
                   candidate_cost[order[a]], DenseClearance(qa), LateralResiduals(qa).cwiseAbs().maxCoeff());
     result.phase2_iterations += RunPhase(2, &qa, a == 0 ? rng : rng.Derive(static_cast<std::uint64_t>(a)), &ws, &cost);
-    ProjectOntoConstraints(&qa, &ws, options_.constraint_projection_steps);
+    // The result is polished far below the tolerance (Gauss-Newton converges quadratically here).
+    ProjectOntoConstraints(&qa, &ws, 2 * options_.constraint_projection_steps, 1e-3 * options_.constraint_tolerance);
     const bool valid = LateralResiduals(qa).cwiseAbs().maxCoeff() <= options_.constraint_tolerance &&
                        DenseCollisionFree(qa, options_.required_clearance);
     spdlog::debug("stomp phase 2 attempt {}: cost {:.4g}, clearance {:.3f} m, valid {}", a, cost, DenseClearance(qa),

@@ -157,7 +157,8 @@ class StompBasePlanner {
                                          double theta_goal, bool reverse) const;
   TrajectoryMatrix AlignedInitialization(const TrajectoryMatrix& phase1, double theta_start, double theta_goal,
                                          int sign_start, int sign_goal) const;
-  bool ProjectOntoConstraints(TrajectoryMatrix* q, Workspace* ws, int steps) const;
+  // Gauss-Newton steps (with backtracking) until the worst residual is below target [m].
+  bool ProjectOntoConstraints(TrajectoryMatrix* q, Workspace* ws, int steps, double target) const;
   BaseTrajectory ToBaseTrajectory(const TrajectoryMatrix& q, double duration, double* max_lateral,
                                   double* max_track) const;
 
