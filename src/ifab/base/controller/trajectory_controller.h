@@ -32,8 +32,8 @@
 namespace ifab::base {
 
 struct BaseControllerOptions {
-  double p_t{4.0};                ///< gain on the translational displacement e_t [rad/s per m]
-  double p_theta{1.2};            ///< gain on the angular displacement e_theta [1/s]
+  double p_t{8.0};                ///< gain on the translational displacement e_t [rad/s per m]
+  double p_theta{2.0};            ///< gain on the angular displacement e_theta [1/s]
   double track_gauge{1.0};        ///< distance between the track centre lines B [m]
   double max_track_speed{0.3};    ///< track speed limit [m/s]
   double goal_tolerance_xy{0.03};     ///< done when the end is this close along its heading [m]
