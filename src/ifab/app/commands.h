@@ -10,5 +10,6 @@ namespace ifab::app {
 void AddRunCommand(CLI::App& app, int& exit_code);
 void AddRobotCommand(CLI::App& app, int& exit_code);
 void AddPlanArmCommand(CLI::App& app, int& exit_code);
+void AddPlanBaseCommand(CLI::App& app, int& exit_code);
 
 }  // namespace ifab::app

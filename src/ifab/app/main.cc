@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   ifab::app::AddRunCommand(app, exit_code);
   ifab::app::AddRobotCommand(app, exit_code);
   ifab::app::AddPlanArmCommand(app, exit_code);
+  ifab::app::AddPlanBaseCommand(app, exit_code);
 
   try {
     app.parse(argc, argv);

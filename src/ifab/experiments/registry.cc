@@ -9,6 +9,7 @@ const std::vector<ExperimentInfo>& Registry() {
       BrickStackExperiment(),
       LrfBiasExperiment(),
       ArmPlanningExperiment(),
+      BasePlanningExperiment(),
   };
   return registry;
 }
