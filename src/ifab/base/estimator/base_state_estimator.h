@@ -1,0 +1,194 @@
+#pragma once
+/// \file
+/// Base state estimator of the paper's section III-B (eq. 1-3): each laser scan (the measurement
+/// scan, rigid at its middle time) is matched against a few earlier reference scans (keyframes
+/// spaced in distance and angle over a receding horizon), fused with the gyro's integrated
+/// rotation, and solved with Ceres (its TinySolver, a dense Levenberg-Marquardt that keeps all
+/// of its memory between solves).
+///
+/// Usage:
+///   BaseStateEstimator estimator(options, T_base_laser);
+///   estimator.Reset(T_site_base_from_localization, t);
+///   for each gyro sample: estimator.AddGyro(sample);     // before the scan it precedes
+///   for each scan: const BaseEstimate& e = estimator.AddScan(scan);  // e.IsUsable()?
+///
+/// The pose is T_world_base where "world" is whatever frame Reset() was given (the site, on
+/// the robot). No allocation per scan in the steady state: buffers are sized at construction
+/// (from Options::max_beams) and reused; adding a keyframe rebuilds that keyframe's kd-tree,
+/// which does allocate (nanoflann's node pool), once per keyframe.
+
+#include <Eigen/Core>
+#include <array>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ifab/core/config.h"
+#include "ifab/core/se2.h"
+#include "ifab/msgs/msgs.h"
+
+namespace ifab::base {
+
+/// How a measurement point is compared with the reference points.
+enum class MatchResidual {
+  kKernel,       ///< eq. 1 as written: Gaussian kernels over reference points within a radius
+  kPointToLine,  ///< improvement (off by default): distance to the reference scan's local line
+};
+
+/// How reference points count in eq. 1's sum.
+enum class ReferenceWeighting {
+  kNone,       ///< eq. 1 as written: every reference point counts once
+  kArcLength,  ///< improvement: each counts by the length of surface it samples, so the sum
+               ///< approximates the kernel integrated along the surface and no longer pulls
+               ///< measurement points towards where the reference happens to be denser
+};
+
+/// How the translation of the initial guess is predicted when no motion hint is given (the
+/// rotation comes from the gyro).
+enum class MotionPrior {
+  kNone,              ///< start from the previous pose
+  kConstantVelocity,  ///< previous pose + last velocity * dt
+};
+
+struct EstimatorOptions {
+  // Scan preprocessing.
+  double min_range{0.1};           ///< [m] beams shorter than this are dropped
+  double max_range{29.0};          ///< [m] beams longer than this are dropped
+  double min_point_spacing{0.05};  ///< [m] consecutive kept points are at least this far apart
+  int max_points{400};             ///< measurement points kept per scan (evenly thinned beyond)
+  int max_beams{1081};             ///< buffers are sized for scans of this many beams
+  int min_points{40};              ///< fewer valid points than this: the scan is not matched
+
+  // Eq. 1.
+  MatchResidual residual{MatchResidual::kKernel};  ///< eq. 1 or the point-to-line variant
+  double sigma{0.05};  ///< [m] kernel scale sigma: G(p_M - p_R, 2 sigma^2 I)
+  /// [m] larger sigmas solved first (coarse to fine, widens the basin); empty = paper (one sigma)
+  std::vector<double> coarse_sigmas{};
+  double search_radius_sigmas{4.0};  ///< reference points within this many sqrt(2)*sigma count
+  int neighbors_per_reference{8};    ///< at most this many nearest points per reference scan
+
+  // Reference scans (receding horizon of keyframes).
+  int num_reference_scans{3};           ///< keyframes matched against (the reference set)
+  /// Keyframes kept (within the horizon); when more than num_reference_scans, each scan is
+  /// matched against the num_reference_scans nearest to its predicted pose, and revisiting a
+  /// place reuses its keyframes instead of adding new ones. 0: keep num_reference_scans.
+  int keyframe_capacity{0};
+  double keyframe_distance{0.15};       ///< [m] a new keyframe when every kept one is this far
+  double keyframe_angle_deg{5.0};       ///< [deg] ... or turned this much from the pose
+  double keyframe_interval{1e9};        ///< [s] ... or this much time while moving
+  double horizon{60.0};                 ///< [s] keyframes older than this are dropped (not the newest)
+  double reference_point_spacing{0.04};  ///< [m] spacing of the points kept in a keyframe
+  /// Reference points whose nearer neighbour along the scan is farther than this many sigma are
+  /// dropped: samples sparser than the kernel (grazing walls, far range, lone mixed pixels)
+  /// make eq. 1 lumpy and pull along walls. 0 keeps every point.
+  double max_reference_gap_sigmas{4.0};
+  /// Measurement points whose nearest reference point lies within this many sigma of the end of
+  /// its chain (depth jump, occlusion, range or density cut-off) skip that reference: the kernel
+  /// sum is one-sided there and would pin the pose to the reference's. 0 keeps every point.
+  double end_margin_sigmas{4.0};
+  ReferenceWeighting reference_weighting{ReferenceWeighting::kNone};  ///< eq. 1 or arc length
+  /// Improvement: sample each reference scan as a polyline (consecutive points within
+  /// max_reference_gap_sigmas linked, not across depth jumps) every reference_point_spacing,
+  /// instead of keeping its raw (thinned) points. Sparse far or grazing samples otherwise make
+  /// eq. 1 lumpy and hold the pose at the reference (motion is underestimated).
+  bool interpolate_reference{false};
+
+  // Eq. 2.
+  double gyro_weight{1e6};  ///< c_G [1/rad^2]: weight of the squared gyro error against sum(1 - G)
+  MotionPrior motion_prior{MotionPrior::kConstantVelocity};  ///< translation of the initial guess
+  /// [1/m^2, 1/rad^2] weak quadratic pull to the predicted pose, added to eq. 3 so that a
+  /// direction the scan does not observe stays at the prediction (negligible elsewhere: the
+  /// scan's information is ~1e4-1e6). 0 = eq. 3 as written.
+  double prior_weight{1.0};
+
+  // Solver.
+  int max_associations{4};      ///< data-association rounds per sigma level
+  int max_iterations{10};       ///< LM iterations per association round
+  double converged_step{1e-4};  ///< [m or rad] stop re-associating when the pose moved less
+
+  // Failure detection.
+  double min_matched_fraction{0.3};  ///< fewer points with a reference neighbour: failed
+  double degeneracy_ratio{0.02};     ///< min/max eigenvalue of the (scaled) information below: degenerate
+  double max_rotation_jump_deg{5.0}; ///< [deg] match disagrees with the gyro by more: failed
+  double max_translation_jump{0.3};  ///< [m] match farther from the prediction: failed
+  int reseed_after_failures{5};      ///< this many failures in a row restart the references (0: never)
+
+  /// Read the fields a YAML map names (unknown keys are rejected); defaults stay otherwise.
+  static EstimatorOptions FromConfig(const ConfigNode& node);
+  /// Empty if valid, else what is wrong.
+  std::string Validate() const;
+};
+
+/// Outcome of one scan.
+enum class EstimateStatus {
+  kOk,                ///< matched; pose and covariance usable
+  kDegenerate,        ///< matched, but the geometry leaves a direction unconstrained (see cov)
+  kReference,         ///< first scan after Reset: taken as reference, pose = the reset pose
+  kTooFewPoints,      ///< too few valid points (or matched points): pose is the prediction
+  kUnexplainedJump,   ///< the match jumps in a way the gyro/motion does not explain: prediction
+  kSolverFailed,      ///< the solver returned no usable answer: prediction
+};
+const char* StatusName(EstimateStatus status);
+
+/// The estimate for one scan.
+struct BaseEstimate {
+  Seconds t{0.0};                  ///< the scan's middle time
+  Pose2 T_world_base;              ///< estimated pose (the prediction when the match failed)
+  Eigen::Matrix3d covariance{Eigen::Matrix3d::Identity()};  ///< of (x, y, theta) [m^2, rad^2]
+  EstimateStatus status{EstimateStatus::kReference};
+  int num_points{0};               ///< measurement points used
+  double matched_fraction{0.0};    ///< of those, with a reference point within the radius
+  double score{0.0};               ///< mean over points of eq. 1's e_mi (kernels of peak 1)
+  double gyro_error_rad{0.0};      ///< E_G of eq. 2 at the solution (0 if no gyro)
+  bool gyro_used{false};           ///< gyro samples covered the interval since the last scan
+  double degeneracy{0.0};          ///< min/max eigenvalue of the (scaled) information matrix
+  int iterations{0};               ///< LM iterations, summed over rounds and sigma levels
+  double cost{0.0};                ///< final cost of eq. 3 (sum of squares / 2)
+  bool keyframe_added{false};      ///< this scan joined the reference set
+
+  /// Ok or degenerate: the pose came from a match.
+  bool IsUsable() const {
+    return status == EstimateStatus::kOk || status == EstimateStatus::kDegenerate ||
+           status == EstimateStatus::kReference;
+  }
+};
+
+class BaseStateEstimator {
+ public:
+  /// T_base_laser: the laser's planar mount on the base.
+  BaseStateEstimator(const EstimatorOptions& options, const Pose2& T_base_laser);
+  ~BaseStateEstimator();
+  BaseStateEstimator(const BaseStateEstimator&) = delete;
+  BaseStateEstimator& operator=(const BaseStateEstimator&) = delete;
+
+  /// Set the pose (e.g. from the last localization) at time t. With keep_references the
+  /// reference scans are moved rigidly with the correction and matching goes on; otherwise they
+  /// are cleared and the next scan becomes the first reference.
+  void Reset(const Pose2& T_world_base, Seconds t, bool keep_references = false);
+
+  /// A gyro sample; rate.z() is the yaw rate of the base [rad/s]. Samples must arrive in time
+  /// order; the sample at time t_i holds the rate over (t_{i-1}, t_i].
+  void AddGyro(const GyroSample& sample);
+
+  /// Match one scan; returns the estimate (valid until the next call). Throws InputError if the
+  /// scan has more beams than Options::max_beams or goes back in time.
+  /// motion_hint, if given, is the base's motion since the previous scan (T_prev_current, e.g.
+  /// from commanded track speeds or wheel odometry); it only seeds the initial guess (its
+  /// rotation too when no gyro covers the interval) and is not part of eq. 3.
+  const BaseEstimate& AddScan(const LaserScan& scan, const std::optional<Pose2>& motion_hint = {});
+
+  /// The latest estimate.
+  const BaseEstimate& Latest() const { return latest_; }
+  const EstimatorOptions& options() const { return options_; }
+  int NumReferenceScans() const;
+
+ private:
+  struct Impl;
+  EstimatorOptions options_;
+  Pose2 T_base_laser_;
+  BaseEstimate latest_;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace ifab::base

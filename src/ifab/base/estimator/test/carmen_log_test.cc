@@ -1,0 +1,112 @@
+#include "ifab/base/estimator/carmen_log.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <sstream>
+
+#include "ifab/core/angles.h"
+#include "ifab/core/error.h"
+
+namespace ifab::base {
+namespace {
+
+using ::testing::HasSubstr;
+
+const std::string kData = ESTIMATOR_TEST_DATA;
+
+std::string ErrorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(CarmenLog, ReadsFlaserRobotlaserAndOdomAndSkipsTheRest) {
+  const CarmenLog log = ReadCarmenLog(kData + "/good.clf");
+  ASSERT_EQ(log.scans.size(), 3u);
+  ASSERT_EQ(log.odometry.size(), 2u);
+  // 2 comments, PARAM, an empty line, SYNC, UNKNOWNMESSAGE.
+  EXPECT_EQ(log.skipped_lines, 6);
+
+  // FLASER with an odd number of beams: -90..+90 degrees, both ends included.
+  const LogScan& a = log.scans[0];
+  EXPECT_EQ(a.line, 6);
+  ASSERT_EQ(a.scan.size(), 5u);
+  EXPECT_DOUBLE_EQ(a.scan.ranges[3], 81.9);
+  EXPECT_NEAR(a.scan.angle_min, -kPi / 2, 1e-12);
+  EXPECT_NEAR(a.scan.Angle(4), kPi / 2, 1e-12);
+  EXPECT_DOUBLE_EQ(a.scan.stamp.t, 100.05);
+  EXPECT_FALSE(a.scan.IsValid(3)) << "81.9 m is beyond range_max: no return";
+  EXPECT_TRUE(a.scan.IsValid(0));
+  EXPECT_DOUBLE_EQ(a.laser_pose.x, 0.10);
+  EXPECT_DOUBLE_EQ(a.odom.x, 0.01);
+  EXPECT_DOUBLE_EQ(a.odom.theta, 0.03);
+
+  // FLASER with an even number of beams: 180 / n steps, the last one short of +90.
+  const LogScan& b = log.scans[1];
+  ASSERT_EQ(b.scan.size(), 4u);
+  EXPECT_NEAR(b.scan.angle_increment, kPi / 4, 1e-12);
+  EXPECT_NEAR(b.odom.theta, WrapAngle(-3.5), 1e-12);
+
+  // ROBOTLASER1 carries its own angles and the robot pose.
+  const LogScan& c = log.scans[2];
+  ASSERT_EQ(c.scan.size(), 5u);
+  EXPECT_DOUBLE_EQ(c.scan.angle_min, -1.5708);
+  EXPECT_DOUBLE_EQ(c.scan.angle_increment, 0.7854);
+  EXPECT_DOUBLE_EQ(c.scan.range_max, 30.0);
+  EXPECT_DOUBLE_EQ(c.laser_pose.x, 1.0);
+  EXPECT_DOUBLE_EQ(c.odom.x, 0.9);
+  EXPECT_DOUBLE_EQ(c.scan.stamp.t, 100.45);
+
+  EXPECT_DOUBLE_EQ(log.odometry[1].t, 100.50);
+  EXPECT_DOUBLE_EQ(log.odometry[1].pose.x, 0.05);
+}
+
+TEST(CarmenLog, ConfigurableFlaserFieldOfView) {
+  CarmenReadOptions options;
+  options.flaser_fov_deg = 100.0;
+  const CarmenLog log = ReadCarmenLog(kData + "/good.clf", options);
+  EXPECT_NEAR(log.scans[0].scan.angle_min, DegToRad(-50.0), 1e-12);
+  EXPECT_NEAR(log.scans[0].scan.angle_increment, DegToRad(25.0), 1e-12);
+}
+
+TEST(CarmenLog, BrokenLinesNameFileAndLine) {
+  EXPECT_THAT(ErrorOf([] { ReadCarmenLog(kData + "/broken_count.clf"); }),
+              HasSubstr("broken_count.clf:3: FLASER line ends early: expected odom_x odom_y odom_theta"));
+  EXPECT_THAT(ErrorOf([] { ReadCarmenLog(kData + "/broken_number.clf"); }),
+              HasSubstr("broken_number.clf:2: ODOM line: expected a number for x y theta (token 3), "
+                        "got 'abc'"));
+  EXPECT_THAT(ErrorOf([] { ReadCarmenLog(kData + "/missing.clf"); }),
+              HasSubstr("missing.clf: cannot open"));
+  std::istringstream bad_count("FLASER -3 1 2 3\n");
+  EXPECT_THAT(ErrorOf([&] { ParseCarmenLog(bad_count, "x.clf"); }),
+              HasSubstr("x.clf:1: FLASER line: expected a count in [0, 100000] for num_readings, got -3"));
+}
+
+TEST(Relations, ReadsWithHeaderAndComments) {
+  const auto rel = ReadRelations(kData + "/good.relations");
+  ASSERT_EQ(rel.size(), 2u);
+  EXPECT_DOUBLE_EQ(rel[0].t1, 100.05);
+  EXPECT_DOUBLE_EQ(rel[0].t2, 100.25);
+  EXPECT_DOUBLE_EQ(rel[0].delta.x, 0.5);
+  EXPECT_DOUBLE_EQ(rel[0].delta.y, 0.1);
+  EXPECT_DOUBLE_EQ(rel[0].delta.theta, 0.2);
+  EXPECT_NEAR(rel[1].delta.theta, WrapAngle(-3.0), 1e-12);
+  EXPECT_EQ(rel[1].line, 4);
+}
+
+TEST(Relations, BrokenLinesNameFileAndLine) {
+  EXPECT_THAT(ErrorOf([] { ReadRelations(kData + "/broken.relations"); }),
+              HasSubstr("broken.relations:2: expected 8 numbers 't1 t2 x y z roll pitch yaw'"));
+  std::istringstream late_header("1 2 0 0 0 0 0 0\nt1 t2 x y z roll pitch yaw\n");
+  EXPECT_THAT(ErrorOf([&] { ParseRelations(late_header, "r.txt"); }), HasSubstr("r.txt:2: expected 8"));
+  std::istringstream not_planar("1 2 0 0 0.5 0 0 0\n");
+  EXPECT_THAT(ErrorOf([&] { ParseRelations(not_planar, "r.txt"); }),
+              HasSubstr("r.txt:1: expected a planar relation"));
+}
+
+}  // namespace
+}  // namespace ifab::base
