@@ -11,10 +11,11 @@
 namespace ifab {
 
 CalibrationOptions CalibrationOptions::FromConfig(const ConfigNode& c) {
-  c.ExpectKeys({"registration", "laser_extent"});
+  c.ExpectKeys({"registration", "laser_extent", "autodiff"});
   CalibrationOptions o;
   if (auto r = c.Find("registration")) o.registration = RegistrationOptions::FromConfig(*r);
   c.ReadPositive("laser_extent", o.laser_extent);
+  c.Read("autodiff", o.autodiff);
   return o;
 }
 
@@ -46,6 +47,7 @@ CalibrationSummary CalibrateLaserMount(const std::vector<CalibrationSweep>& swee
   input.sweep = &all;
   input.T_tool0_laser = T_tool0_laser_guess;
   input.laser_extent = options.laser_extent;
+  input.autodiff = options.autodiff;
   const internal::PoseProblemOutput r = internal::SolvePoseProblem(input, bodies, options.registration);
 
   CalibrationSummary s;

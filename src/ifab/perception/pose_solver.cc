@@ -69,8 +69,9 @@ class RegistrationChunk final : public ceres::CostFunction {
 class CalibrationChunk final : public ceres::CostFunction {
  public:
   CalibrationChunk(const Scene& scene, const Eigen::Matrix3d& R0_laser, const Eigen::Matrix3d& R0_body,
-                   std::vector<const SweepPoint*> points, std::vector<const PointMatch*> matches)
-      : scene_(scene), R0_laser_(R0_laser), R0_body_(R0_body), points_(std::move(points)), matches_(std::move(matches)) {
+                   std::vector<const SweepPoint*> points, std::vector<const PointMatch*> matches, bool autodiff)
+      : scene_(scene), R0_laser_(R0_laser), R0_body_(R0_body), points_(std::move(points)), matches_(std::move(matches)),
+        autodiff_(autodiff) {
     int n = 0;
     for (const auto* m : matches_) n += m->NumResiduals();
     set_num_residuals(n);
@@ -79,9 +80,10 @@ class CalibrationChunk final : public ceres::CostFunction {
   }
 
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+    const bool want = jacobians && (jacobians[0] || jacobians[1]);
+    if (!autodiff_) return EvaluateAnalytic(parameters, residuals, want ? jacobians : nullptr);
     const double* xl = parameters[0];
     const double* xb = parameters[1];
-    const bool want = jacobians && (jacobians[0] || jacobians[1]);
     using J = ceres::Jet<double, 12>;
     J xlj[6], xbj[6];
     for (int k = 0; k < 6; ++k) {
@@ -116,10 +118,34 @@ class CalibrationChunk final : public ceres::CostFunction {
   }
 
  private:
+  // The same residuals with hand-derived Jacobians (residuals.h), checked against autodiff.
+  bool EvaluateAnalytic(double const* const* parameters, double* residuals, double** jacobians) const {
+    const PoseJacobianData XL(parameters[0], R0_laser_), XB(parameters[1], R0_body_);
+    using Row6 = Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor>;
+    using Row3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+    int row = 0;
+    for (std::size_t i = 0; i < points_.size(); ++i) {
+      const PointMatch& m = *matches_[i];
+      const SweepPoint& s = *points_[i];
+      const ScenePrimitive* prim = m.primitive >= 0 ? &scene_.primitives()[static_cast<std::size_t>(m.primitive)] : nullptr;
+      const LaserRayJacobian lr = LaserRayWithJacobian(XL, s.T_base_tool0, s.p_laser);
+      RayJacobian rj;
+      double* jb = jacobians && jacobians[1] ? jacobians[1] + row * 6 : nullptr;
+      const int n = PointResidualAnalytic(m, prim, lr.ray, XB, residuals + row, jb, jacobians ? &rj : nullptr);
+      if (jacobians && jacobians[0]) {
+        Eigen::Map<Row6>(jacobians[0] + row * 6, n, 6) =
+            Eigen::Map<const Row3>(rj.d_origin, n, 3) * lr.d_origin + Eigen::Map<const Row3>(rj.d_direction, n, 3) * lr.d_direction;
+      }
+      row += n;
+    }
+    return true;
+  }
+
   const Scene& scene_;
   Eigen::Matrix3d R0_laser_, R0_body_;
   std::vector<const SweepPoint*> points_;
   std::vector<const PointMatch*> matches_;
+  bool autodiff_{false};
 };
 
 // Damping of one step: (x - x_start) / sigma. Re-centred every step, so it holds directions the
@@ -423,7 +449,8 @@ class Engine {
         if (calibrating_) {
           std::vector<const SweepPoint*> ps;
           for (std::size_t j = c; j < end; ++j) ps.push_back(&(*input_.sweep)[idx[j]]);
-          b.problem->AddResidualBlock(new CalibrationChunk(scene_, b.R0_laser, b.R0[k], std::move(ps), std::move(ms)),
+          b.problem->AddResidualBlock(new CalibrationChunk(scene_, b.R0_laser, b.R0[k], std::move(ps), std::move(ms),
+                                                           input_.autodiff),
                                       nullptr, b.x_laser.data(), b.x[k].data());
         } else {
           std::vector<RayT<double>> ps;

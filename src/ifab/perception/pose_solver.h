@@ -15,6 +15,7 @@ struct PoseProblemInput {
   const std::vector<SweepPoint>* sweep{nullptr};    ///< calibration: raw points, mount solved
   Pose3 T_tool0_laser{Pose3::Identity()};           ///< calibration: initial mount
   double laser_extent{1.0};
+  bool autodiff{false};                             ///< calibration: Ceres autodiff (else analytic)
 };
 
 struct PoseProblemOutput {

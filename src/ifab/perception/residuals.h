@@ -193,4 +193,25 @@ struct PoseJacobianData {
 int PointResidualAnalytic(const PointMatch& m, const ScenePrimitive* primitive, const RayT<double>& ray,
                           const PoseJacobianData& X, double* r, double* jacobian);
 
+/// Derivatives of a point's residual with respect to its ray (n x 3 each, row-major), for the
+/// analytic calibration path: d r / d origin and d r / d direction (range held fixed).
+struct RayJacobian {
+  double d_origin[9];
+  double d_direction[9];
+};
+
+/// PointResidualAnalytic plus the derivatives with respect to the ray (null to skip).
+int PointResidualAnalytic(const PointMatch& m, const ScenePrimitive* primitive, const RayT<double>& ray,
+                          const PoseJacobianData& X, double* r, double* jacobian, RayJacobian* ray_jacobian);
+
+/// The ray of a raw laser point through the mount (eq. 6) with its derivatives with respect to
+/// the mount parameters x = [t, w] (3 x 6 each): d origin / dx and d direction / dx.
+struct LaserRayJacobian {
+  RayT<double> ray;
+  Eigen::Matrix<double, 3, 6> d_origin;
+  Eigen::Matrix<double, 3, 6> d_direction;
+};
+LaserRayJacobian LaserRayWithJacobian(const PoseJacobianData& X_laser, const Pose3& T_base_tool0,
+                                      const Eigen::Vector3d& p_laser);
+
 }  // namespace ifab

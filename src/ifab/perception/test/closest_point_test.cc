@@ -178,6 +178,22 @@ TEST_P(PrimitiveConformance, MountJacobianMatchesFiniteDifferences) {
       Eigen::MatrixXd jac(n, 12);
       for (int k = 0; k < n; ++k) jac.row(k) = r[k].v.transpose();
       testing::ExpectJacobianMatchesNumeric(f, x, jac, 1e-5);
+      // The analytic calibration path agrees with autodiff.
+      const LaserRayJacobian lr = LaserRayWithJacobian(PoseJacobianData(x.data(), R0l), T_base_tool0, p_laser);
+      RayJacobian rj;
+      double ra[3], jb[18];
+      const int na = PointResidualAnalytic(m, &sp, lr.ray, PoseJacobianData(x.data() + 6, R0b), ra, jb, &rj);
+      ASSERT_EQ(na, n);
+      using Row3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+      const Eigen::MatrixXd jl = Eigen::Map<const Row3>(rj.d_origin, n, 3) * lr.d_origin +
+                                 Eigen::Map<const Row3>(rj.d_direction, n, 3) * lr.d_direction;
+      for (int k = 0; k < n; ++k) {
+        EXPECT_NEAR(ra[k], r[k].a, 1e-9);
+        for (int c = 0; c < 6; ++c) {
+          EXPECT_NEAR(jl(k, c), r[k].v[c], 1e-7 * std::max(1.0, std::abs(r[k].v[c])));
+          EXPECT_NEAR(jb[k * 6 + c], r[k].v[6 + c], 1e-7 * std::max(1.0, std::abs(r[k].v[6 + c])));
+        }
+      }
       ++checked;
     }
   }
