@@ -339,10 +339,11 @@ class Engine {
                                            options_.shadow_edge_distance);
     double whitened = 0.0;
     if (options_.residual == RegistrationResidual::kRay) {
-      // The face the ray hits first. A point far from it is not explained by the model along its
-      // ray (unmodelled object) and gets zero error; so does a shadow point (flagged, and farther
-      // than shadow_distance from the face hit) and a ray that meets its face nearly edge-on. A
-      // ray that hits nothing is matched to the tangent plane at its closest point.
+      // The face the ray hits first. A point whose range is far from that face's is not explained
+      // by the model along its ray (unmodelled object) and gets zero error; so does a shadow
+      // point (flagged, and its range more than shadow_distance off) and a ray that meets its
+      // face nearly edge-on. A ray that hits nothing is matched to the tangent plane at its
+      // closest point.
       const double reach = options_.max_distance > 0.0 ? options_.max_distance : 1.0;
       const auto hit = scene_.CastRay(rp.origin, u, range + reach);
       const int primitive = hit ? hit->primitive : near.primitive;
@@ -351,11 +352,25 @@ class Engine {
       if (!hit && !(near.distance > 1e-12)) n = -u;
       const double signed_distance = n.dot(rp.p - x);
       const double c = std::abs(n.dot(u));
-      if (options_.max_distance > 0.0 && std::abs(signed_distance) > options_.max_distance) {
-        matches_[i] = m;
-        return;
+      // The error the sensor makes is along the ray: gate on the range error (at a grazing face
+      // a beam that slipped past it is metres long but only millimetres off the face's plane).
+      const double range_error = hit ? std::abs(signed_distance) / std::max(c, 1e-3) : std::abs(signed_distance);
+      // A point in front of its face (range short) may be an unmodelled occluder: zero error if
+      // far. One far behind it saw through where the model has a solid: evidence that the pose
+      // is wrong, kept with a bounded weight (below) unless it is a shadow point.
+      const bool behind = signed_distance < 0.0;
+      double gate_weight = 1.0;
+      if (options_.max_distance > 0.0 && range_error > options_.max_distance) {
+        if (!behind || !hit) {
+          matches_[i] = m;
+          return;
+        }
+        gate_weight = options_.max_distance / range_error;
       }
-      if (flagged_[i] && std::abs(signed_distance) > options_.shadow_distance) {
+      const double normal_sigma = std::sqrt(options_.noise.NormalVariance(u, range, n));
+      const double range_sigma = hit ? normal_sigma / std::max(c, 1e-3) : normal_sigma;
+      if (flagged_[i] && range_error > options_.shadow_distance &&
+          range_error > options_.shadow_sigmas * range_sigma) {
         labels_[i] = PointLabel::kShadow;
         matches_[i] = m;
         return;
@@ -371,7 +386,6 @@ class Engine {
       m.primitive = primitive;
       m.normal_body = T_body_base.linear() * n;
       m.offset_body = m.normal_body.dot(T_body_base * x);
-      const double normal_sigma = std::sqrt(options_.noise.NormalVariance(u, range, n));
       if (hit) {
         m.kind = PointMatch::Kind::kRange;
         m.inv_sigma = c / normal_sigma;
@@ -380,6 +394,7 @@ class Engine {
         m.inv_sigma = 1.0 / normal_sigma;
       }
       whitened = signed_distance / normal_sigma;
+      m.inv_sigma *= std::sqrt(gate_weight);
     } else {
       // Eq. 7 and the paper's shadow rule: flagged and far from the closest primitive: zero error.
       if (flagged_[i] && near.distance > options_.shadow_distance) {

@@ -21,7 +21,7 @@ Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
 
 RegistrationOptions RegistrationOptions::FromConfig(const ConfigNode& c) {
   c.ExpectKeys({"noise", "residual", "max_iterations", "max_solver_iterations", "translation_tolerance",
-                "rotation_tolerance", "shadow_points", "shadow_edge_distance", "shadow_distance", "max_distance", "max_incidence_deg",
+                "rotation_tolerance", "shadow_points", "shadow_edge_distance", "shadow_distance", "shadow_sigmas", "max_distance", "max_incidence_deg",
                 "loss", "loss_scale", "step_sigma_translation", "step_sigma_rotation", "prior_sigma_translation", "prior_sigma_rotation", "unconstrained_std",
                 "num_threads"});
   RegistrationOptions o;
@@ -39,6 +39,7 @@ RegistrationOptions RegistrationOptions::FromConfig(const ConfigNode& c) {
   c.Read("shadow_points", o.shadow_points);
   c.ReadNonNegative("shadow_edge_distance", o.shadow_edge_distance);
   c.ReadNonNegative("shadow_distance", o.shadow_distance);
+  c.ReadNonNegative("shadow_sigmas", o.shadow_sigmas);
   c.ReadNonNegative("max_distance", o.max_distance);
   if (c.Has("max_incidence_deg")) {
     double deg = 90.0;

@@ -49,9 +49,13 @@ struct RegistrationOptions {
   bool shadow_points{true};            ///< apply the shadow-point rule (Sec. V-B)
   double shadow_edge_distance{0.01};   ///< [m] a ray passing this close to an edge flags its point
   double shadow_distance{0.02};        ///< [m] a flagged point this far from its closest primitive
-                                       ///< gets zero error
-  double max_distance{0.15};           ///< [m] points farther from every primitive get zero error
-                                       ///< (unmodelled things); 0 = keep all (the paper)
+                                       ///< (kRay: range this far off the face hit) gets zero error
+  double shadow_sigmas{3.0};           ///< kRay: ... and more than this many sigmas of its range
+                                       ///< (a 2 cm cut alone would trim the 18 mm range noise near
+                                       ///< every edge and bias the fit)
+  double max_distance{0.15};           ///< [m] points farther from every primitive (kRay: range
+                                       ///< off by more) get zero error (unmodelled things);
+                                       ///< 0 = keep all (the paper)
   double max_incidence{M_PI / 2};      ///< [rad] kRay: points whose ray meets the face
                                        ///< more obliquely get zero error (range unreliable)
   RobustLoss loss{RobustLoss::kNone};  ///< robust re-weighting (improvement; the paper: none)

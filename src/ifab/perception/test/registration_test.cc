@@ -159,7 +159,7 @@ TEST(Registration, WarnsAboutDirectionsTheScanDoesNotConstrain) {
   EXPECT_NEAR(n.z(), 1.0, 1e-6);
   EXPECT_NEAR(n.dot(s.bodies[0].T_base_body.translation()), 0.0, 2e-4);
   // Free directions keep their guess (the step damping holds them).
-  EXPECT_NEAR(s.bodies[0].T_base_body.translation().x(), 0.1, 1e-6);
+  EXPECT_NEAR(s.bodies[0].T_base_body.translation().x(), 0.1, 1e-4);
 }
 
 TEST(UnconstrainedDirections, NamesAxesOrWritesTheDirection) {
