@@ -42,7 +42,7 @@ double SignedArea(const std::vector<Eigen::Vector2d>& poly) {
 }  // namespace
 
 Site SiteFromConfig(const ConfigNode& c) {
-  c.ExpectKeys({"ground_z", "boundary", "walls", "obstacles", "feeder_pick", "brick", "stack", "bricks"});
+  c.ExpectKeys({"ground_z", "boundary", "walls", "obstacles", "brick", "stack", "bricks"});
   Site site;
   c.Read("ground_z", site.ground_z);
 
@@ -81,7 +81,6 @@ Site SiteFromConfig(const ConfigNode& c) {
     for (std::size_t i = 0; i < obs->size(); ++i)
       site.obstacles.push_back(ReadSiteBox((*obs)[i], "obstacle_" + std::to_string(i), nullptr));
   }
-  if (auto f = c.Find("feeder_pick")) site.T_site_feeder_pick = ReadPose(*f);
   site.brick.size = {0.240, 0.115, 0.052};
   if (auto b = c.Find("brick")) {
     b->ExpectKeys({"size"});

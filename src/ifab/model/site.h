@@ -28,7 +28,6 @@ struct Site {
   std::vector<Eigen::Vector2d> boundary;  ///< polygon (CCW) the base footprint must stay inside
   std::vector<SiteBox> walls;             ///< physical walls (seen by the base laser)
   std::vector<SiteBox> obstacles;         ///< static obstacles, the feeder among them
-  Pose3 T_site_feeder_pick{Pose3::Identity()};  ///< where the feeder presents the next brick (brick centre)
   Box brick;                              ///< brick size (default German DF 240 x 115 x 52 mm)
   Pose2 stack_origin;                     ///< where the stack is built (x, y, yaw of its bricks)
   std::vector<SiteBox> bricks;            ///< bricks placed so far

@@ -18,6 +18,7 @@ TEST(Site, LoadsTheBrickStackSite) {
   const auto objects = site.Objects();
   EXPECT_EQ(objects.front().name, "ground");
   EXPECT_EQ(site.ObstacleFootprints().size(), site.walls.size() + site.obstacles.size());
+  EXPECT_TRUE(site.bricks.empty());
   EXPECT_NEAR(site.DesignedBrickPose(2).translation().z(), 2.5 * 0.052, 1e-12);
 }
 

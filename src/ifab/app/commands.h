@@ -1,0 +1,14 @@
+#pragma once
+/// \file
+/// The `ifab` subcommands, one file each. Each Add*Command registers a subcommand whose
+/// callback sets `exit_code`. Bad input is thrown as ifab::InputError and reported by main().
+
+#include <CLI/CLI.hpp>
+
+namespace ifab::app {
+
+void AddRunCommand(CLI::App& app, int& exit_code);
+void AddRobotCommand(CLI::App& app, int& exit_code);
+void AddPlanArmCommand(CLI::App& app, int& exit_code);
+
+}  // namespace ifab::app

@@ -1,0 +1,15 @@
+#include "ifab/experiments/experiment.h"
+#include "ifab/experiments/experiments.h"
+
+namespace ifab::experiments {
+
+// Every experiment, in the order `ifab run --help` lists them. One line each.
+const std::vector<ExperimentInfo>& Registry() {
+  static const std::vector<ExperimentInfo> registry = {
+      LrfBiasExperiment(),
+      ArmPlanningExperiment(),
+  };
+  return registry;
+}
+
+}  // namespace ifab::experiments

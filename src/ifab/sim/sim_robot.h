@@ -1,0 +1,119 @@
+#pragma once
+/// \file
+/// The simulated In situ Fabricator behind hal::Robot: world, tracked base, two UTM-30LX, gyro,
+/// arm servo, vacuum gripper, device clocks. The only holder of ground truth (truth() accessors
+/// are for experiments' scoring and tests, never for algorithm modules).
+
+#include <deque>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "ifab/hal/robot.h"
+#include "ifab/model/robot_model.h"
+#include "ifab/sim/components.h"
+#include "ifab/sim/lrf_model.h"
+#include "ifab/sim/world.h"
+
+namespace ifab::sim {
+
+struct SimOptions {
+  std::string urdf{"robots/insitu_fabricator.urdf"};  ///< under data/ unless absolute
+  std::string site{"sites/brick_stack.yaml"};
+  double step{0.0025};                  ///< [s] physics step (the gyro's 400 Hz)
+  TrackOptions tracks;
+  LrfOptions base_laser;
+  LrfOptions arm_laser;
+  GyroOptions gyro;
+  ServoOptions servo;
+  ClockOptions base_laser_clock, arm_laser_clock, gyro_clock, arm_clock;
+  std::array<double, 6> base_laser_mount_error{};  ///< true mount = design * error (x y z r p y)
+  std::array<double, 6> arm_laser_mount_error{};
+  double grip_capture_distance{0.02};   ///< [m] the gripper grips a brick within this distance
+  double release_sigma_xy{0.0003};      ///< [m] brick placement error at release
+  double release_sigma_yaw_deg{0.05};
+  Pose3 T_base_feeder{Pose3::Identity()};  ///< where the on-board feeder presents a brick (centre)
+  double feeder_sigma_xy{0.0003};       ///< [m] how precisely the feeder presents a brick
+  double feeder_sigma_yaw_deg{0.05};
+
+  /// Read data/robots/insitu_fabricator.yaml's `sim:` section and the sensor files it names.
+  static SimOptions Load(const std::string& robot_yaml);
+  static SimOptions FromConfig(const ConfigNode& config);
+};
+
+class SimRobot final : public hal::Robot {
+ public:
+  SimRobot(const SimOptions& options, Pose2 T_site_base0, Vector6d q0, std::uint64_t seed);
+
+  // hal::Robot
+  Seconds Now() const override { return t_; }
+  void Wait(Seconds dt) override;
+  void CommandTracks(const TrackCommand& command) override;
+  void SendJointTrajectory(const JointTrajectory& trajectory) override;
+  bool ArmBusy() const override;
+  void SetGripper(bool grip) override;
+  std::vector<LaserScan> TakeLaserScans(DeviceId laser) override;
+  std::vector<GyroSample> TakeGyroSamples() override;
+  std::vector<JointState> TakeJointStates() override;
+  std::vector<SyncPulse> TakeSyncPulses() override;
+
+  // Ground truth, for scoring and tests only.
+  const World& world() const { return world_; }
+  World& mutable_world() { return world_; }
+  const RobotModel& robot_model() const { return robot_; }
+  Pose2 true_base_pose() const { return base_.pose(); }
+  void teleport_base(const Pose2& p) { base_.set_pose(p); }
+  Pose3 true_T_tool0_arm_laser() const { return T_tool0_arm_laser_true_; }
+  Pose3 true_T_base_base_laser() const { return T_base_base_laser_true_; }
+  Vector6d true_joint_angles() const { return servo_.q_physical(); }
+  /// True pose of the gripper contact point in the site.
+  Pose3 true_T_site_gripper() const;
+  bool holding_brick() const { return held_.has_value(); }
+  /// The brick the feeder presents now (true pose in the site).
+  SiteBox feeder_brick() const;
+  /// The gyro's current bias (truth).
+  Eigen::Vector3d true_gyro_bias() const { return gyro_.bias(); }
+
+  /// A scan from the arm laser at the current state without noise or timing (tests).
+  const LrfModel& arm_lrf() const { return arm_lrf_; }
+  const LrfModel& base_lrf() const { return base_lrf_; }
+  const SimOptions& options() const { return options_; }
+
+ private:
+  struct Snapshot {
+    Seconds t;
+    Pose2 base;
+    Vector6d q;
+  };
+  void Step();
+  Pose3 TrueSiteBase(const Pose2& p) const;
+  Pose3 ArmLaserPose(const Pose2& base, const Vector6d& q_physical) const;
+  void PresentFeederBrick();
+
+  SimOptions options_;
+  RobotModel robot_;
+  World world_;
+  RandomStream rng_;
+  TrackedBase base_;
+  ArmServo servo_;
+  Gyro gyro_;
+  LrfModel base_lrf_, arm_lrf_;
+  DeviceClock base_laser_clock_, arm_laser_clock_, gyro_clock_, arm_clock_;
+  RandomStream base_lrf_rng_, arm_lrf_rng_, gripper_rng_;
+  Pose3 T_base_base_laser_true_, T_tool0_arm_laser_true_;
+
+  Seconds t_{0.0};
+  long step_count_{0};
+  Seconds next_state_{0.0}, next_base_scan_{0.0}, next_arm_scan_{0.0};
+  Snapshot base_scan_start_{}, arm_scan_start_{};
+  std::vector<LaserScan> base_scans_, arm_scans_;
+  std::vector<GyroSample> gyro_samples_;
+  std::vector<JointState> joint_states_;
+  std::vector<SyncPulse> pulses_;
+
+  std::optional<Pose3> held_;  ///< T_gripper_brick of the held brick
+  SiteBox feeder_brick_;  ///< its pose is T_base_brick: the feeder rides on the base
+  int bricks_released_{0};
+};
+
+}  // namespace ifab::sim
