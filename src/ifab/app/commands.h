@@ -11,5 +11,7 @@ void AddRunCommand(CLI::App& app, int& exit_code);
 void AddRobotCommand(CLI::App& app, int& exit_code);
 void AddPlanArmCommand(CLI::App& app, int& exit_code);
 void AddPlanBaseCommand(CLI::App& app, int& exit_code);
+void AddRegisterCommand(CLI::App& app, int& exit_code);  // perception
+void AddCalibrateCommand(CLI::App& app, int& exit_code);  // perception
 
 }  // namespace ifab::app

@@ -25,6 +25,8 @@ int main(int argc, char** argv) {
   ifab::app::AddRobotCommand(app, exit_code);
   ifab::app::AddPlanArmCommand(app, exit_code);
   ifab::app::AddPlanBaseCommand(app, exit_code);
+  ifab::app::AddRegisterCommand(app, exit_code);
+  ifab::app::AddCalibrateCommand(app, exit_code);
 
   try {
     app.parse(argc, argv);
