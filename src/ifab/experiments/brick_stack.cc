@@ -13,6 +13,7 @@
 #include "ifab/core/data_path.h"
 #include "ifab/experiments/experiments.h"
 #include "ifab/perception/cloud.h"
+#include "ifab/perception/ply.h"
 #include "ifab/sequencer/mission.h"
 #include "ifab/sim/sim_robot.h"
 
@@ -128,7 +129,8 @@ nlohmann::json Run(const RunContext& ctx) {
     const double e_long = 1000 * d.dot(design.linear().col(0));
     const double e_short = 1000 * d.dot(design.linear().col(1));
     const auto v = XyzRpyFromPose(placed[k].T_site_box);
-    const double e_yaw = RadToDeg(WrapAngle(v[5] - XyzRpyFromPose(design)[5]));
+    // Yaw modulo 180 deg: the brick is symmetric and may be placed turned around.
+    const double e_yaw = RadToDeg(0.5 * WrapAngle(2.0 * (v[5] - XyzRpyFromPose(design)[5])));
     err_long.Add(std::abs(e_long));
     err_short.Add(std::abs(e_short));
     err_max.Add(std::hypot(e_long, e_short));
@@ -168,7 +170,7 @@ nlohmann::json Run(const RunContext& ctx) {
       after_deg.Add(RadToDeg(AngleDistance(log.localized_pose, log.desired)));
     }
     if (!log.cloud.empty() && ctx.config->Get<bool>("write_clouds", true))
-      WritePly((out / fmt::format("cloud_visit_{:02d}.ply", log.visit)).string(), log.cloud);
+      WritePly((out / fmt::format("cloud_visit_{:02d}.ply", log.visit)).string(), ToPointCloud(log.cloud));
   }
   std::ofstream true_csv(out / "trajectory_true.csv");
   true_csv << "t,x,y,theta\n";

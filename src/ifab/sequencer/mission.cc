@@ -75,7 +75,8 @@ Pose3 Mission::Pose3Of(const Pose2& p) const {
 void Mission::Start(const Pose2& T_site_base, const Vector6d& q) {
   T_site_base_ = T_site_base;
   q_ = q;
-  estimator_->Reset(T_site_base, robot_.Now());
+  last_scan_mid_ = robot_.Now();
+  estimator_->Reset(T_site_base, last_scan_mid_);
 }
 
 void Mission::PumpSensors() {
@@ -88,28 +89,31 @@ void Mission::PumpSensors() {
       case DeviceId::kArm: sync_arm_.AddPulse(p); break;
     }
   }
-  auto synced = [](DeviceClockSync& sync, Stamp& stamp) {
+  // A packet is used once its device's clock is synced, and only if it is newer than the last
+  // one used (before the first pulse pair there is no trustworthy time for it).
+  auto synced = [](DeviceClockSync& sync, Stamp& stamp, Seconds& last) {
     sync.AddPacket(stamp);
-    sync.Apply(stamp);  // before the first pair, stamp.t keeps the arrival time
+    if (!sync.Apply(stamp) || stamp.t <= last) return false;
+    last = stamp.t;
+    return true;
   };
-  std::vector<GyroSample> gyro = robot_.TakeGyroSamples();
-  for (auto& g : gyro) synced(sync_gyro_, g.stamp);
-  std::vector<LaserScan> scans = robot_.TakeLaserScans(DeviceId::kBaseLaser);
-  for (auto& s : scans) synced(sync_base_laser_, s.stamp);
-  for (auto& s : robot_.TakeLaserScans(DeviceId::kArmLaser)) {
-    synced(sync_arm_laser_, s.stamp);
-    arm_scans_.push_back(std::move(s));
-  }
-  for (auto& j : robot_.TakeJointStates()) {
-    synced(sync_arm_, j.stamp);
-    joint_states_.push_back(j);
-  }
+  std::vector<GyroSample> gyro;
+  for (auto& g : robot_.TakeGyroSamples())
+    if (synced(sync_gyro_, g.stamp, last_gyro_)) gyro.push_back(g);
+  std::vector<LaserScan> scans;
+  for (auto& s : robot_.TakeLaserScans(DeviceId::kBaseLaser))
+    if (synced(sync_base_laser_, s.stamp, last_base_scan_)) scans.push_back(std::move(s));
+  for (auto& s : robot_.TakeLaserScans(DeviceId::kArmLaser))
+    if (synced(sync_arm_laser_, s.stamp, last_arm_scan_)) arm_scans_.push_back(std::move(s));
+  for (auto& j : robot_.TakeJointStates())
+    if (synced(sync_arm_, j.stamp, last_joint_state_)) joint_states_.push_back(j);
   // Gyro samples up to each scan go in before it (the estimator integrates between scans).
   std::size_t gi = 0;
   for (const auto& scan : scans) {
     const double t_scan = scan.MidTime();
     while (gi < gyro.size() && gyro[gi].stamp.t <= t_scan) estimator_->AddGyro(gyro[gi++]);
     const base::BaseEstimate& e = estimator_->AddScan(scan);
+    last_scan_mid_ = t_scan;
     if (e.IsUsable() || e.status == base::EstimateStatus::kTooFewPoints) T_site_base_ = e.T_world_base;
     if (trace_) trace_->push_back({e.t, e.T_world_base});
   }
@@ -252,7 +256,12 @@ bool Mission::Localize(VisitLog& log) {
       continue;
     }
     const double half = DegToRad(o_.sweep_half_angle_deg);
-    const auto sweep_steps = arm_->SweepJoint(q_, 0, ik.q[0] - half, ik.q[0] + half, DegToRad(o_.sweep_speed_deg_s));
+    // To the scan pose (joint 1 turned to the sweep's start), then sweep joint 1 across it.
+    Vector6d q_start = ik.q;
+    q_start[0] -= half;
+    arm::PrimitiveResult sweep_steps = arm_->MoveToJoints(q_, q_start);
+    if (sweep_steps.ok)
+      sweep_steps.Append(arm_->SweepJoint(q_start, 0, q_start[0], ik.q[0] + half, DegToRad(o_.sweep_speed_deg_s)));
     if (!sweep_steps.ok) {
       log.failure = "sweep: " + sweep_steps.message;
       continue;
@@ -271,13 +280,17 @@ bool Mission::Localize(VisitLog& log) {
     model.obstacles.clear();
     const SiteLocalization loc = LocalizeInSite(log.cloud, model, T_site_base, c_.registration, true);
     log.registration_report = loc.registration.BriefReport();
-    const double std_xy = std::sqrt(std::max(loc.covariance(0, 0), loc.covariance(1, 1)));
-    const double std_yaw = RadToDeg(std::sqrt(loc.covariance(5, 5)));
+    // Trust is judged on the workpiece's pose in the base frame: that is what placing a brick
+    // uses (T_site_base's position std is mostly the workpiece's yaw std times the distance).
+    const RegisteredBody* workpiece = loc.registration.Find("site");
+    const double std_xy = workpiece ? std::sqrt(std::max(workpiece->covariance(0, 0), workpiece->covariance(1, 1))) : 1e9;
+    const double std_yaw = workpiece ? RadToDeg(std::sqrt(workpiece->covariance(5, 5))) : 1e9;
     const Pose2 localized = Pose2Of(loc.T_site_base);
     const double jump = TranslationDistance(localized, T_site_base_);
     std::string why;
     if (!loc.IsUsable()) why = "registration failed";
-    else if (loc.registration.num_inliers < o_.min_inliers) why = fmt::format("{} inliers", loc.registration.num_inliers);
+    else if (!workpiece || workpiece->inliers < o_.min_inliers)
+      why = fmt::format("{} points on the workpiece", workpiece ? workpiece->inliers : 0);
     else if (std_xy > o_.max_localization_std_m) why = fmt::format("position std {:.4f} m", std_xy);
     else if (std_yaw > o_.max_localization_std_deg) why = fmt::format("heading std {:.3f} deg", std_yaw);
     else if (jump > o_.max_localization_jump_m) why = fmt::format("correction of {:.3f} m", jump);
@@ -285,6 +298,14 @@ bool Mission::Localize(VisitLog& log) {
       if (b.name != "ground" && !b.unconstrained.empty() && why.empty()) why = "unconstrained: " + b.unconstrained.front();
     if (!why.empty()) {
       spdlog::warn("{}: registration not trusted ({}); {}", log.position, why, log.registration_report);
+      for (const auto& b : loc.registration.bodies) {
+        std::string dirs;
+        for (const auto& d : b.unconstrained) dirs += d + "; ";
+        spdlog::warn("  body {}: {} inliers, std diag [{:.4f} {:.4f} {:.4f} {:.4f} {:.4f} {:.4f}] {}", b.name,
+                     b.inliers, std::sqrt(b.covariance(0, 0)), std::sqrt(b.covariance(1, 1)),
+                     std::sqrt(b.covariance(2, 2)), std::sqrt(b.covariance(3, 3)), std::sqrt(b.covariance(4, 4)),
+                     std::sqrt(b.covariance(5, 5)), dirs);
+      }
       log.failure = "registration not trusted: " + why;
       continue;
     }
@@ -293,7 +314,9 @@ bool Mission::Localize(VisitLog& log) {
     log.localized_pose = localized;
     log.T_site_base_at_scan = T_site_base;
     T_site_base_ = localized;
-    estimator_->Reset(localized, robot_.Now(), /*keep_references=*/true);
+    // The registered pose holds from the scan on (the base stood still): reset at the last scan
+    // the estimator has seen, so the next one follows it in time.
+    estimator_->Reset(localized, last_scan_mid_, /*keep_references=*/true);
     return true;
   }
   StopSafely(fmt::format("{}: no trusted localization after {} sweeps ({})", log.position, log.sweeps, log.failure));

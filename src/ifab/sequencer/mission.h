@@ -38,9 +38,9 @@ struct MissionOptions {
   double settle_time{1.0};           ///< [s] standstill after driving, before scanning
   int plan_attempts{3};              ///< planner calls (different seeds) before skipping a position
   int max_sweeps{3};                 ///< sweeps per localization before the mission stops
-  int min_inliers{300};              ///< registration with fewer inlier points is not trusted
-  double max_localization_std_m{0.003};   ///< ... nor one whose position std exceeds this
-  double max_localization_std_deg{0.3};   ///< ... or heading std
+  int min_inliers{300};              ///< registration with fewer points on the workpiece is not trusted
+  double max_localization_std_m{0.003};   ///< ... nor one whose workpiece position std (base frame) exceeds this
+  double max_localization_std_deg{1.0};   ///< ... or workpiece yaw std
   double max_localization_jump_m{0.3};    ///< ... nor a correction larger than this
   double scan_distance{0.8};         ///< [m] arm laser to the top of the workpiece
   double scan_elevation_deg{50.0};   ///< view direction's angle below horizontal
@@ -125,6 +125,8 @@ class Mission {
   std::unique_ptr<base::BaseStateEstimator> estimator_;
   std::unique_ptr<arm::ArmPrimitives> arm_;
   DeviceClockSync sync_base_laser_, sync_arm_laser_, sync_gyro_, sync_arm_;
+  Seconds last_scan_mid_{0.0};  ///< mid time of the last base scan given to the estimator
+  Seconds last_gyro_{-1e300}, last_base_scan_{-1e300}, last_arm_scan_{-1e300}, last_joint_state_{-1e300};
   std::vector<LaserScan> arm_scans_;
   std::vector<JointState> joint_states_;
   Site workpiece_;        ///< the site plus the bricks built so far (designed poses)
