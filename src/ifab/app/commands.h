@@ -10,6 +10,9 @@ namespace ifab::app {
 void AddRunCommand(CLI::App& app, int& exit_code);
 void AddRobotCommand(CLI::App& app, int& exit_code);
 void AddPlanArmCommand(CLI::App& app, int& exit_code);
-void AddEstimateCommand(CLI::App& app, int& exit_code);
+void AddPlanBaseCommand(CLI::App& app, int& exit_code);
+void AddRegisterCommand(CLI::App& app, int& exit_code);  // perception
+void AddCalibrateCommand(CLI::App& app, int& exit_code);  // perception
+void AddEstimateCommand(CLI::App& app, int& exit_code);  // base estimator
 
 }  // namespace ifab::app

@@ -24,6 +24,9 @@ int main(int argc, char** argv) {
   ifab::app::AddRunCommand(app, exit_code);
   ifab::app::AddRobotCommand(app, exit_code);
   ifab::app::AddPlanArmCommand(app, exit_code);
+  ifab::app::AddPlanBaseCommand(app, exit_code);
+  ifab::app::AddRegisterCommand(app, exit_code);
+  ifab::app::AddCalibrateCommand(app, exit_code);
   ifab::app::AddEstimateCommand(app, exit_code);
 
   try {

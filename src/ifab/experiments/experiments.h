@@ -5,7 +5,9 @@
 
 namespace ifab::experiments {
 
+ExperimentInfo BrickStackExperiment();  ///< paper Sec. VI-VII: the brick stack (the default)
 ExperimentInfo LrfBiasExperiment();  ///< paper Fig. 7: stationary floor scans from 3 heights
 ExperimentInfo ArmPlanningExperiment();  ///< paper Sec. IV: iLQG on seeded brick and scan motions
+ExperimentInfo BasePlanningExperiment();  ///< paper Sec. III-A: STOMP on seeded start/goal poses
 
 }  // namespace ifab::experiments

@@ -6,8 +6,10 @@ namespace ifab::experiments {
 // Every experiment, in the order `ifab run --help` lists them. One line each.
 const std::vector<ExperimentInfo>& Registry() {
   static const std::vector<ExperimentInfo> registry = {
+      BrickStackExperiment(),
       LrfBiasExperiment(),
       ArmPlanningExperiment(),
+      BasePlanningExperiment(),
   };
   return registry;
 }

@@ -1,0 +1,29 @@
+#include "ifab/base/planner/base_trajectory.h"
+
+#include <fmt/format.h>
+
+#include <fstream>
+
+#include "ifab/core/error.h"
+
+namespace ifab::base {
+
+double BaseTrajectory::Length() const {
+  double l = 0.0;
+  for (std::size_t i = 1; i < points.size(); ++i) l += TranslationDistance(points[i - 1].pose, points[i].pose);
+  return l;
+}
+
+void BaseTrajectory::WriteCsv(const std::string& path) const {
+  std::ofstream out(path);
+  IFAB_THROW_UNLESS(static_cast<bool>(out), "{}: cannot open for writing", path);
+  out << "index,x,y,theta,v,omega\n";
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Point& p = points[i];
+    out << fmt::format("{},{:.6f},{:.6f},{:.6f},{:.6f},{:.6f}\n", i, p.pose.x, p.pose.y, p.pose.theta, p.v,
+                       p.omega);
+  }
+  IFAB_THROW_UNLESS(static_cast<bool>(out), "{}: write failed", path);
+}
+
+}  // namespace ifab::base

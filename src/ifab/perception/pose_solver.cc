@@ -1,0 +1,681 @@
+#include "ifab/perception/pose_solver.h"
+
+#include <ceres/ceres.h>
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <cstdio>
+#include <cstdlib>
+
+#include "ifab/core/error.h"
+#include "ifab/perception/residuals.h"
+
+namespace ifab::internal {
+namespace {
+
+using Params = std::array<double, 6>;  // [t, w] about R0
+
+constexpr int kChunk = 256;  // points per Ceres residual block
+
+Pose3 ApplyParams(const Params& x, const Eigen::Matrix3d& R0) {
+  Pose3 T = Pose3::Identity();
+  T.linear() = ExpSO3(Eigen::Vector3d(x[3], x[4], x[5])) * R0;
+  T.translation() = Eigen::Vector3d(x[0], x[1], x[2]);
+  return T;
+}
+
+Params ParamsAt(const Pose3& T) { return {T.translation().x(), T.translation().y(), T.translation().z(), 0, 0, 0}; }
+
+// Points of one body (registration): residuals of a fixed p_base against the body pose.
+class RegistrationChunk final : public ceres::CostFunction {
+ public:
+  RegistrationChunk(const Scene& scene, const Eigen::Matrix3d& R0, std::vector<RayT<double>> points,
+                    std::vector<const PointMatch*> matches)
+      : scene_(scene), R0_(R0), points_(std::move(points)), matches_(std::move(matches)) {
+    int n = 0;
+    for (const auto* m : matches_) n += m->NumResiduals();
+    set_num_residuals(n);
+    mutable_parameter_block_sizes()->push_back(6);
+  }
+
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+    const PoseJacobianData X(parameters[0], R0_);
+    double* J = jacobians ? jacobians[0] : nullptr;
+    int row = 0;
+    for (std::size_t i = 0; i < points_.size(); ++i) {
+      const PointMatch& m = *matches_[i];
+      const ScenePrimitive* prim = m.primitive >= 0 ? &scene_.primitives()[static_cast<std::size_t>(m.primitive)] : nullptr;
+      row += PointResidualAnalytic(m, prim, points_[i], X, residuals + row, J ? J + row * 6 : nullptr);
+    }
+    return true;
+  }
+
+ private:
+  const Scene& scene_;
+  Eigen::Matrix3d R0_;
+  std::vector<RayT<double>> points_;
+  std::vector<const PointMatch*> matches_;
+};
+
+// Points of one body (calibration): eq. 6 inside eq. 7, the mount and the body pose both free.
+class CalibrationChunk final : public ceres::CostFunction {
+ public:
+  CalibrationChunk(const Scene& scene, const Eigen::Matrix3d& R0_laser, const Eigen::Matrix3d& R0_body,
+                   std::vector<const SweepPoint*> points, std::vector<const PointMatch*> matches, bool autodiff)
+      : scene_(scene), R0_laser_(R0_laser), R0_body_(R0_body), points_(std::move(points)), matches_(std::move(matches)),
+        autodiff_(autodiff) {
+    int n = 0;
+    for (const auto* m : matches_) n += m->NumResiduals();
+    set_num_residuals(n);
+    mutable_parameter_block_sizes()->push_back(6);
+    mutable_parameter_block_sizes()->push_back(6);
+  }
+
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+    const bool want = jacobians && (jacobians[0] || jacobians[1]);
+    if (!autodiff_) return EvaluateAnalytic(parameters, residuals, want ? jacobians : nullptr);
+    const double* xl = parameters[0];
+    const double* xb = parameters[1];
+    using J = ceres::Jet<double, 12>;
+    J xlj[6], xbj[6];
+    for (int k = 0; k < 6; ++k) {
+      xlj[k] = J(xl[k], k);
+      xbj[k] = J(xb[k], 6 + k);
+    }
+    const PoseT<J> XLj(xlj, R0_laser_), XBj(xbj, R0_body_);
+    const PoseT<double> XL(xl, R0_laser_), XB(xb, R0_body_);
+    int row = 0;
+    for (std::size_t i = 0; i < points_.size(); ++i) {
+      const PointMatch& m = *matches_[i];
+      const SweepPoint& s = *points_[i];
+      const ScenePrimitive* prim = m.primitive >= 0 ? &scene_.primitives()[static_cast<std::size_t>(m.primitive)] : nullptr;
+      if (want) {
+        const RayT<J> ray = LaserRay<J>(XLj, s.T_base_tool0, s.p_laser);
+        J r[3];
+        const int n = PointResidual<J>(m, prim, ray, XBj, r);
+        for (int k = 0; k < n; ++k) {
+          residuals[row + k] = r[k].a;
+          if (jacobians[0])
+            for (int c = 0; c < 6; ++c) jacobians[0][(row + k) * 6 + c] = r[k].v[c];
+          if (jacobians[1])
+            for (int c = 0; c < 6; ++c) jacobians[1][(row + k) * 6 + c] = r[k].v[6 + c];
+        }
+        row += n;
+      } else {
+        const RayT<double> ray = LaserRay<double>(XL, s.T_base_tool0, s.p_laser);
+        row += PointResidual<double>(m, prim, ray, XB, residuals + row);
+      }
+    }
+    return true;
+  }
+
+ private:
+  // The same residuals with hand-derived Jacobians (residuals.h), checked against autodiff.
+  bool EvaluateAnalytic(double const* const* parameters, double* residuals, double** jacobians) const {
+    const PoseJacobianData XL(parameters[0], R0_laser_), XB(parameters[1], R0_body_);
+    using Row6 = Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor>;
+    using Row3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+    int row = 0;
+    for (std::size_t i = 0; i < points_.size(); ++i) {
+      const PointMatch& m = *matches_[i];
+      const SweepPoint& s = *points_[i];
+      const ScenePrimitive* prim = m.primitive >= 0 ? &scene_.primitives()[static_cast<std::size_t>(m.primitive)] : nullptr;
+      const LaserRayJacobian lr = LaserRayWithJacobian(XL, s.T_base_tool0, s.p_laser);
+      RayJacobian rj;
+      double* jb = jacobians && jacobians[1] ? jacobians[1] + row * 6 : nullptr;
+      const int n = PointResidualAnalytic(m, prim, lr.ray, XB, residuals + row, jb, jacobians ? &rj : nullptr);
+      if (jacobians && jacobians[0]) {
+        Eigen::Map<Row6>(jacobians[0] + row * 6, n, 6) =
+            Eigen::Map<const Row3>(rj.d_origin, n, 3) * lr.d_origin + Eigen::Map<const Row3>(rj.d_direction, n, 3) * lr.d_direction;
+      }
+      row += n;
+    }
+    return true;
+  }
+
+  const Scene& scene_;
+  Eigen::Matrix3d R0_laser_, R0_body_;
+  std::vector<const SweepPoint*> points_;
+  std::vector<const PointMatch*> matches_;
+  bool autodiff_{false};
+};
+
+// Damping of one step: (x - x_start) / sigma. Re-centred every step, so it holds directions the
+// data leave free without pulling the others (the data's information is many orders larger).
+class StepPrior final : public ceres::SizedCostFunction<6, 6> {
+ public:
+  StepPrior(const Params& start, double sigma_t, double sigma_r) : start_(start) {
+    for (int k = 0; k < 3; ++k) {
+      w_[k] = 1.0 / sigma_t;
+      w_[3 + k] = 1.0 / sigma_r;
+    }
+  }
+  bool Evaluate(double const* const* p, double* r, double** j) const override {
+    for (int k = 0; k < 6; ++k) r[k] = (p[0][k] - start_[static_cast<std::size_t>(k)]) * w_[k];
+    if (j && j[0]) {
+      for (int k = 0; k < 36; ++k) j[0][k] = 0.0;
+      for (int k = 0; k < 6; ++k) j[0][k * 6 + k] = w_[k];
+    }
+    return true;
+  }
+
+ private:
+  Params start_;
+  double w_[6];
+};
+
+double RobustWeight(RobustLoss loss, double scale, double whitened) {
+  const double a = std::abs(whitened);
+  switch (loss) {
+    case RobustLoss::kNone: return 1.0;
+    case RobustLoss::kHuber: return a <= scale ? 1.0 : scale / a;
+    case RobustLoss::kCauchy: return 1.0 / (1.0 + (a / scale) * (a / scale));
+  }
+  return 1.0;
+}
+
+class Engine {
+ public:
+  Engine(const PoseProblemInput& input, const std::vector<RegistrationBody>& bodies, const RegistrationOptions& options)
+      : input_(input), bodies_(bodies), options_(options), scene_(bodies) {
+    for (const auto& b : bodies_) poses_.push_back(b.T_base_body);
+    laser_ = input.T_tool0_laser;
+    calibrating_ = input.sweep != nullptr;
+    const std::size_t n = calibrating_ ? input.sweep->size() : input.cloud->size();
+    matches_.resize(n);
+    labels_.resize(n);
+    flagged_.resize(n);
+  }
+
+  PoseProblemOutput Run() {
+    const auto start = std::chrono::steady_clock::now();
+    PoseProblemOutput out;
+    RegistrationSummary& s = out.summary;
+    s.num_points = static_cast<int>(matches_.size());
+    if (matches_.empty()) {
+      s.status = RegistrationStatus::kNoPoints;
+      s.message = "no points";
+      Finish(out, start);
+      return out;
+    }
+    bool any_free = calibrating_;
+    for (const auto& b : bodies_) any_free = any_free || b.free;
+
+    s.status = RegistrationStatus::kMaxIterations;
+    s.message = fmt::format("not converged in {} correspondence steps", options_.max_iterations);
+    for (int it = 0; it < options_.max_iterations && any_free; ++it) {
+      Match();
+      if (CountInliers() == 0) {
+        s.status = RegistrationStatus::kNoPoints;
+        s.message = "no point lies near the model under the initial guess";
+        break;
+      }
+      s.iterations = it + 1;
+      const auto step = Step();
+      if (!step.ok) {
+        s.status = RegistrationStatus::kSolverFailed;
+        s.message = step.message;
+        break;
+      }
+      if (step.max_translation < options_.translation_tolerance && step.max_rotation < options_.rotation_tolerance) {
+        s.status = RegistrationStatus::kConverged;
+        s.message = fmt::format("converged in {} correspondence steps", it + 1);
+        break;
+      }
+      // Points whose rays pass an edge can switch faces back and forth, and the steps then cycle
+      // through the same few poses (typically within a fraction of a millimetre): stop there.
+      if (const int period = CyclePeriod(); period > 0) {
+        s.status = RegistrationStatus::kConverged;
+        s.message = fmt::format("converged in {} correspondence steps to a {}-cycle of face assignments "
+                                "(amplitude {:.3f} mm, {:.4f} deg)",
+                                it + 1, period, 1e3 * cycle_translation_, cycle_rotation_ * 180.0 / M_PI);
+        break;
+      }
+    }
+    if (!any_free) {
+      s.status = RegistrationStatus::kConverged;
+      s.message = "no free body: poses held";
+    }
+    Match();  // labels and weights at the final poses
+    Finish(out, start);
+    return out;
+  }
+
+ private:
+  struct StepResult {
+    bool ok{true};
+    std::string message;
+    double max_translation{0.0};
+    double max_rotation{0.0};
+  };
+
+  // The state after each step (all free poses), to detect cycles.
+  std::vector<std::vector<Pose3>> history_;
+  double cycle_translation_{0.0}, cycle_rotation_{0.0};
+  Eigen::VectorXd previous_delta_;
+  double relaxation_{1.0};
+
+  int CyclePeriod() {
+    std::vector<Pose3> now = poses_;
+    now.push_back(laser_);
+    history_.push_back(now);
+    const std::size_t n = history_.size();
+    for (std::size_t period = 2; period <= 4 && period < n; ++period) {
+      const auto& then = history_[n - 1 - period];
+      bool same = true;
+      for (std::size_t k = 0; k < now.size() && same; ++k)
+        same = TranslationDistance(now[k], then[k]) < 1e-9 && RotationAngle(now[k], then[k]) < 1e-9;
+      if (!same) continue;
+      cycle_translation_ = cycle_rotation_ = 0.0;
+      for (std::size_t j = n - period; j < n; ++j)
+        for (std::size_t k = 0; k < now.size(); ++k) {
+          cycle_translation_ = std::max(cycle_translation_, TranslationDistance(history_[j][k], now[k]));
+          cycle_rotation_ = std::max(cycle_rotation_, RotationAngle(history_[j][k], now[k]));
+        }
+      return static_cast<int>(period);
+    }
+    return 0;
+  }
+
+  bool Informs(int body) const { return calibrating_ || bodies_[static_cast<std::size_t>(body)].free; }
+
+  RayPoint PointInBase(std::size_t i) const {
+    if (!calibrating_) return (*input_.cloud)[i];
+    const SweepPoint& s = (*input_.sweep)[i];
+    const Pose3 T_base_laser = s.T_base_tool0 * laser_;
+    return {T_base_laser * s.p_laser, T_base_laser.translation()};
+  }
+
+  void Match() {
+    const auto t0 = std::chrono::steady_clock::now();
+    struct Report {
+      std::chrono::steady_clock::time_point t0;
+      ~Report() {
+        if (std::getenv("IFAB_DEBUG_SOLVER"))
+          std::fprintf(stderr, "match %.4f s\n", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+      }
+    } report{t0};
+    scene_.SetPoses(poses_);
+    inverse_poses_.clear();
+    for (const auto& T : poses_) inverse_poses_.push_back(T.inverse());
+    auto body = [&](const tbb::blocked_range<std::size_t>& range) {
+      for (std::size_t i = range.begin(); i != range.end(); ++i) MatchPoint(i);
+    };
+    const tbb::blocked_range<std::size_t> all(0, matches_.size(), 512);
+    if (options_.num_threads > 1) {
+      tbb::task_arena arena(options_.num_threads);
+      arena.execute([&] { tbb::parallel_for(all, body); });
+    } else {
+      body(all);
+    }
+  }
+
+  void MatchPoint(std::size_t i) {
+    PointMatch m;
+    const RayPoint rp = PointInBase(i);
+    flagged_[i] = false;
+    labels_[i] = PointLabel::kOutlier;
+    const double range = rp.Range();
+    if (!(range > 1e-9)) {
+      matches_[i] = m;
+      return;
+    }
+    const Eigen::Vector3d u = (rp.p - rp.origin) / range;
+    const Scene::Nearest near = scene_.Closest(rp.p);
+    if (near.primitive < 0 || (options_.max_distance > 0.0 && near.distance > options_.max_distance)) {
+      matches_[i] = m;
+      return;
+    }
+    flagged_[i] = options_.shadow_points &&
+                  scene_.RayPassesNearEdge(rp.origin, u, range + options_.shadow_edge_distance,
+                                           options_.shadow_edge_distance);
+    double whitened = 0.0;
+    if (options_.residual == RegistrationResidual::kRay) {
+      // The face the ray hits first. A point whose range is far from that face's is not explained
+      // by the model along its ray (unmodelled object) and gets zero error; so does a shadow
+      // point (flagged, and its range more than shadow_distance off) and a ray that meets its
+      // face nearly edge-on. A ray that hits nothing is matched to the tangent plane at its
+      // closest point.
+      const double reach = options_.max_distance > 0.0 ? options_.max_distance : 1.0;
+      const auto hit = scene_.CastRay(rp.origin, u, range + reach);
+      const int primitive = hit ? hit->primitive : near.primitive;
+      const Eigen::Vector3d x = hit ? Eigen::Vector3d(rp.origin + hit->t * u) : near.point;
+      Eigen::Vector3d n = hit ? hit->normal : Eigen::Vector3d((rp.p - near.point) / near.distance);
+      if (!hit && !(near.distance > 1e-12)) n = -u;
+      const double signed_distance = n.dot(rp.p - x);
+      const double c = std::abs(n.dot(u));
+      // The error the sensor makes is along the ray: gate on the range error (at a grazing face
+      // a beam that slipped past it is metres long but only millimetres off the face's plane).
+      const double range_error = hit ? std::abs(signed_distance) / std::max(c, 1e-3) : std::abs(signed_distance);
+      // A point in front of its face (range short) may be an unmodelled occluder: zero error if
+      // far. One far behind it saw through where the model has a solid: evidence that the pose
+      // is wrong, kept with a bounded weight (below) unless it is a shadow point.
+      const bool behind = signed_distance < 0.0;
+      double gate_weight = 1.0;
+      if (options_.max_distance > 0.0 && range_error > options_.max_distance) {
+        if (!behind || !hit) {
+          matches_[i] = m;
+          return;
+        }
+        gate_weight = options_.max_distance / range_error;
+      }
+      const double normal_sigma = std::sqrt(options_.noise.NormalVariance(u, range, n));
+      const double range_sigma = hit ? normal_sigma / std::max(c, 1e-3) : normal_sigma;
+      if (flagged_[i] && range_error > options_.shadow_distance &&
+          range_error > options_.shadow_sigmas * range_sigma) {
+        labels_[i] = PointLabel::kShadow;
+        matches_[i] = m;
+        return;
+      }
+      if (hit && c < std::cos(options_.max_incidence)) {
+        labels_[i] = PointLabel::kGrazing;
+        matches_[i] = m;
+        return;
+      }
+      const ScenePrimitive& sp = scene_.primitives()[static_cast<std::size_t>(primitive)];
+      const Pose3& T_body_base = inverse_poses_[static_cast<std::size_t>(sp.body)];
+      m.body = sp.body;
+      m.primitive = primitive;
+      m.normal_body = T_body_base.linear() * n;
+      m.offset_body = m.normal_body.dot(T_body_base * x);
+      if (hit) {
+        m.kind = PointMatch::Kind::kRange;
+        m.inv_sigma = c / normal_sigma;
+      } else {
+        m.kind = PointMatch::Kind::kPlane;
+        m.inv_sigma = 1.0 / normal_sigma;
+      }
+      whitened = signed_distance / normal_sigma;
+      m.inv_sigma *= std::sqrt(gate_weight);
+    } else {
+      // Eq. 7 and the paper's shadow rule: flagged and far from the closest primitive: zero error.
+      if (flagged_[i] && near.distance > options_.shadow_distance) {
+        labels_[i] = PointLabel::kShadow;
+        matches_[i] = m;
+        return;
+      }
+      m.kind = PointMatch::Kind::kClosest;
+      m.primitive = near.primitive;
+      m.body = scene_.primitives()[static_cast<std::size_t>(near.primitive)].body;
+      m.sqrt_information = options_.noise.SqrtInformation(u, range);
+      whitened = (m.sqrt_information * (rp.p - near.point)).norm();
+    }
+    const double w = std::sqrt(RobustWeight(options_.loss, options_.loss_scale, whitened));
+    m.sqrt_information *= w;
+    m.inv_sigma *= w;
+    labels_[i] = Informs(m.body) ? PointLabel::kInlier : PointLabel::kFixed;
+    matches_[i] = m;
+  }
+
+  int CountInliers() const {
+    int n = 0;
+    for (auto l : labels_) n += l == PointLabel::kInlier;
+    return n;
+  }
+
+  // The parameter blocks and cost functions of the current matches.
+  struct Built {
+    std::unique_ptr<ceres::Problem> problem;
+    std::vector<Params> x;
+    Params x_laser{};
+    std::vector<Eigen::Matrix3d> R0;
+    Eigen::Matrix3d R0_laser{Eigen::Matrix3d::Identity()};
+    std::vector<double*> free_blocks;  // laser first (calibration), then free bodies in order
+    std::vector<int> block_body;       // -1: the laser
+    int num_residuals{0};
+  };
+
+  Built Build(bool with_priors) {
+    Built b;
+    ceres::Problem::Options po;
+    po.cost_function_ownership = ceres::TAKE_OWNERSHIP;
+    b.problem = std::make_unique<ceres::Problem>(po);
+    b.x.resize(poses_.size());
+    b.R0.resize(poses_.size());
+    for (std::size_t k = 0; k < poses_.size(); ++k) {
+      b.x[k] = ParamsAt(poses_[k]);
+      b.R0[k] = poses_[k].linear();
+    }
+    b.x_laser = ParamsAt(laser_);
+    b.R0_laser = laser_.linear();
+
+    // Group the informative points by body, in chunks.
+    std::vector<std::vector<std::size_t>> by_body(poses_.size());
+    for (std::size_t i = 0; i < matches_.size(); ++i)
+      if (labels_[i] == PointLabel::kInlier) by_body[static_cast<std::size_t>(matches_[i].body)].push_back(i);
+
+    for (std::size_t k = 0; k < poses_.size(); ++k) {
+      const auto& idx = by_body[k];
+      for (std::size_t c = 0; c < idx.size(); c += kChunk) {
+        const std::size_t end = std::min(idx.size(), c + kChunk);
+        std::vector<const PointMatch*> ms;
+        for (std::size_t j = c; j < end; ++j) {
+          ms.push_back(&matches_[idx[j]]);
+          b.num_residuals += matches_[idx[j]].NumResiduals();
+        }
+        if (calibrating_) {
+          std::vector<const SweepPoint*> ps;
+          for (std::size_t j = c; j < end; ++j) ps.push_back(&(*input_.sweep)[idx[j]]);
+          b.problem->AddResidualBlock(new CalibrationChunk(scene_, b.R0_laser, b.R0[k], std::move(ps), std::move(ms),
+                                                           input_.autodiff),
+                                      nullptr, b.x_laser.data(), b.x[k].data());
+        } else {
+          std::vector<RayT<double>> ps;
+          for (std::size_t j = c; j < end; ++j) {
+            const RayPoint& rp = (*input_.cloud)[idx[j]];
+            const double range = rp.Range();
+            ps.push_back({rp.origin, (rp.p - rp.origin) / range, range});
+          }
+          b.problem->AddResidualBlock(new RegistrationChunk(scene_, b.R0[k], std::move(ps), std::move(ms)), nullptr,
+                                      b.x[k].data());
+        }
+      }
+    }
+    auto add_block = [&](double* block, int body) {
+      if (!b.problem->HasParameterBlock(block)) b.problem->AddParameterBlock(block, 6);
+      b.free_blocks.push_back(block);
+      b.block_body.push_back(body);
+      if (with_priors) {
+        Params start;
+        std::copy(block, block + 6, start.begin());
+        b.problem->AddResidualBlock(
+            new StepPrior(start, options_.step_sigma_translation, options_.step_sigma_rotation), nullptr, block);
+      }
+    };
+    if (calibrating_) add_block(b.x_laser.data(), -1);
+    for (std::size_t k = 0; k < poses_.size(); ++k) {
+      if (bodies_[k].free) {
+        add_block(b.x[k].data(), static_cast<int>(k));
+      } else if (b.problem->HasParameterBlock(b.x[k].data())) {
+        b.problem->SetParameterBlockConstant(b.x[k].data());
+      }
+    }
+    return b;
+  }
+
+  StepResult Step() {
+    StepResult r;
+    Built b = Build(/*with_priors=*/true);
+    ceres::Solver::Options so;
+    so.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
+    so.max_num_iterations = options_.max_solver_iterations;
+    so.function_tolerance = 1e-10;
+    so.gradient_tolerance = 1e-14;
+    so.parameter_tolerance = 1e-10;
+    so.num_threads = options_.num_threads;
+    if (std::getenv("TR")) so.initial_trust_region_radius = std::atof(std::getenv("TR"));
+    if (std::getenv("NOJS")) so.jacobi_scaling = false;
+    if (std::getenv("CHECKGRAD")) so.check_gradients = true;
+    so.logging_type = std::getenv("IFAB_DEBUG_SOLVER") ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
+    so.minimizer_progress_to_stdout = std::getenv("IFAB_DEBUG_SOLVER") && std::getenv("IFAB_DEBUG_SOLVER")[0] == '3';
+    ceres::Solver::Summary summary;
+    ceres::Solve(so, b.problem.get(), &summary);
+    if (std::getenv("IFAB_DEBUG_SOLVER")) std::fprintf(stderr, "%s\n", (std::getenv("IFAB_DEBUG_SOLVER")[0] == '2' ? summary.FullReport() : summary.BriefReport()).c_str());
+    if (!summary.IsSolutionUsable()) {
+      r.ok = false;
+      r.message = "Ceres: " + summary.message;
+      return r;
+    }
+    // The solved step as one vector (translations, rotations at a 0.1 m lever). When it turns
+    // back on the previous one, the face assignments are flipping between two states: take only
+    // a fraction of it (halved at every reversal), so the iteration settles between them.
+    std::vector<Pose3> solved;
+    Eigen::VectorXd delta = Eigen::VectorXd::Zero(6 * static_cast<Eigen::Index>(poses_.size() + 1));
+    for (std::size_t k = 0; k <= poses_.size(); ++k) {
+      const bool laser = k == poses_.size();
+      if (laser ? !calibrating_ : !bodies_[k].free) {
+        solved.push_back(laser ? laser_ : poses_[k]);
+        continue;
+      }
+      const Params& x = laser ? b.x_laser : b.x[k];
+      const Pose3& before = laser ? laser_ : poses_[k];
+      solved.push_back(ApplyParams(x, laser ? b.R0_laser : b.R0[k]));
+      delta.segment<3>(6 * static_cast<Eigen::Index>(k)) = solved.back().translation() - before.translation();
+      delta.segment<3>(6 * static_cast<Eigen::Index>(k) + 3) = 0.1 * Eigen::Vector3d(x[3], x[4], x[5]);
+    }
+    if (previous_delta_.size() == delta.size() && delta.dot(previous_delta_) < -0.3 * delta.norm() * previous_delta_.norm())
+      relaxation_ = std::max(relaxation_ / 2.0, 1.0 / 64.0);
+    else
+      relaxation_ = std::min(relaxation_ * 1.5, 1.0);
+    previous_delta_ = delta;
+    for (std::size_t k = 0; k <= poses_.size(); ++k) {
+      Pose3& pose = k == poses_.size() ? laser_ : poses_[k];
+      const Pose3 next = Interpolate(pose, solved[k], relaxation_);
+      r.max_translation = std::max(r.max_translation, (next.translation() - pose.translation()).norm());
+      r.max_rotation = std::max(r.max_rotation, RotationAngle(next, pose));
+      pose = next;
+    }
+    if (std::getenv("IFAB_DEBUG_SOLVER"))
+      std::fprintf(stderr, "step %.3g m %.3g rad relaxation %g\n", r.max_translation, r.max_rotation, relaxation_);
+    return r;
+  }
+
+  void Finish(PoseProblemOutput& out, std::chrono::steady_clock::time_point start) {
+    RegistrationSummary& s = out.summary;
+    out.T_tool0_laser = laser_;
+    s.labels = labels_;
+    s.point_body.assign(matches_.size(), -1);
+    for (std::size_t i = 0; i < matches_.size(); ++i) {
+      if (labels_[i] == PointLabel::kInlier || labels_[i] == PointLabel::kFixed) s.point_body[i] = matches_[i].body;
+      s.num_inliers += labels_[i] == PointLabel::kInlier;
+      s.num_shadow_flagged += flagged_[i];
+      s.num_shadow_removed += labels_[i] == PointLabel::kShadow;
+      s.num_outliers += labels_[i] == PointLabel::kOutlier;
+      s.num_grazing += labels_[i] == PointLabel::kGrazing;
+    }
+    for (std::size_t k = 0; k < bodies_.size(); ++k) {
+      RegisteredBody rb;
+      rb.name = bodies_[k].name;
+      rb.free = bodies_[k].free;
+      rb.T_base_body = poses_[k];
+      for (std::size_t i = 0; i < matches_.size(); ++i)
+        rb.inliers += labels_[i] == PointLabel::kInlier && matches_[i].body == static_cast<int>(k);
+      s.bodies.push_back(rb);
+    }
+    if (s.num_inliers > 0) Information(out);
+    for (const auto& rb : s.bodies)
+      if (!rb.unconstrained.empty())
+        s.warnings.push_back(fmt::format("body '{}' is not constrained by the scan in {} direction(s): {}", rb.name,
+                                         rb.unconstrained.size(), fmt::join(rb.unconstrained, ", ")));
+    if (!out.laser_unconstrained.empty())
+      s.warnings.push_back(fmt::format("the laser mount is not constrained by the sweeps in {} direction(s): {}",
+                                       out.laser_unconstrained.size(), fmt::join(out.laser_unconstrained, ", ")));
+    s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+
+  // Cost, covariance and unconstrained directions at the final poses from J^T J.
+  void Information(PoseProblemOutput& out) {
+    RegistrationSummary& s = out.summary;
+    Built b = Build(/*with_priors=*/false);
+    ceres::Problem::EvaluateOptions eo;
+    eo.parameter_blocks = b.free_blocks;
+    eo.apply_loss_function = false;
+    double cost = 0.0;
+    ceres::CRSMatrix crs;
+    if (b.free_blocks.empty()) {
+      b.problem->Evaluate(ceres::Problem::EvaluateOptions(), &cost, nullptr, nullptr, nullptr);
+    } else {
+      b.problem->Evaluate(eo, &cost, nullptr, nullptr, &crs);
+    }
+    s.cost = cost;
+    s.rms_whitened = b.num_residuals > 0 ? std::sqrt(2.0 * cost / b.num_residuals) : 0.0;
+    if (b.free_blocks.empty()) return;
+    const int n = static_cast<int>(b.free_blocks.size()) * 6;
+    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(n, n);
+    for (int row = 0; row < crs.num_rows; ++row) {
+      for (int a = crs.rows[static_cast<std::size_t>(row)]; a < crs.rows[static_cast<std::size_t>(row) + 1]; ++a) {
+        for (int c = a; c < crs.rows[static_cast<std::size_t>(row) + 1]; ++c) {
+          const double v = crs.values[static_cast<std::size_t>(a)] * crs.values[static_cast<std::size_t>(c)];
+          const int i = crs.cols[static_cast<std::size_t>(a)], j = crs.cols[static_cast<std::size_t>(c)];
+          H(i, j) += v;
+          if (i != j) H(j, i) += v;
+        }
+      }
+    }
+    Eigen::VectorXd prior(n);
+    for (int k = 0; k < n; ++k) {
+      const double sigma = (k % 6) < 3 ? options_.prior_sigma_translation : options_.prior_sigma_rotation;
+      prior[k] = 1.0 / (sigma * sigma);
+    }
+    const Eigen::MatrixXd H_reg = H + Eigen::MatrixXd(prior.asDiagonal());
+    const Eigen::MatrixXd covariance = H_reg.ldlt().solve(Eigen::MatrixXd::Identity(n, n));
+    for (std::size_t k = 0; k < b.free_blocks.size(); ++k) {
+      const int o = static_cast<int>(k) * 6;
+      // Marginal information of this block: Schur complement over the others (regularised).
+      Matrix6d marginal = H.block(o, o, 6, 6);
+      if (n > 6) {
+        std::vector<int> rest;
+        for (int j = 0; j < n; ++j)
+          if (j < o || j >= o + 6) rest.push_back(j);
+        const int m = static_cast<int>(rest.size());
+        Eigen::MatrixXd H_rr(m, m), H_kr(6, m);
+        for (int a = 0; a < m; ++a) {
+          for (int c = 0; c < m; ++c) H_rr(a, c) = H_reg(rest[static_cast<std::size_t>(a)], rest[static_cast<std::size_t>(c)]);
+          for (int r = 0; r < 6; ++r) H_kr(r, a) = H(o + r, rest[static_cast<std::size_t>(a)]);
+        }
+        marginal -= H_kr * H_rr.ldlt().solve(H_kr.transpose());
+      }
+      const int body = b.block_body[k];
+      const double extent = body < 0 ? input_.laser_extent : scene_.Extent(body);
+      const auto free_dirs = UnconstrainedDirections(marginal, extent, options_.unconstrained_std);
+      const Matrix6d cov = covariance.block(o, o, 6, 6);
+      if (body < 0) {
+        out.laser_covariance = cov;
+        out.laser_unconstrained = free_dirs;
+      } else {
+        s.bodies[static_cast<std::size_t>(body)].covariance = cov;
+        s.bodies[static_cast<std::size_t>(body)].unconstrained = free_dirs;
+      }
+    }
+  }
+
+  const PoseProblemInput& input_;
+  const std::vector<RegistrationBody>& bodies_;
+  RegistrationOptions options_;
+  Scene scene_;
+  std::vector<Pose3> poses_, inverse_poses_;
+  Pose3 laser_{Pose3::Identity()};
+  bool calibrating_{false};
+  std::vector<PointMatch> matches_;
+  std::vector<PointLabel> labels_;
+  std::vector<char> flagged_;
+};
+
+}  // namespace
+
+PoseProblemOutput SolvePoseProblem(const PoseProblemInput& input, const std::vector<RegistrationBody>& bodies,
+                                   const RegistrationOptions& options) {
+  IFAB_CHECK((input.cloud != nullptr) != (input.sweep != nullptr));
+  Engine engine(input, bodies, options);
+  return engine.Run();
+}
+
+}  // namespace ifab::internal

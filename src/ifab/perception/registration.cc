@@ -1,0 +1,171 @@
+#include "ifab/perception/registration.h"
+
+#include <Eigen/Eigenvalues>
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "ifab/core/config.h"
+#include "ifab/perception/pose_solver.h"
+
+namespace ifab {
+namespace {
+
+Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d s;
+  s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return s;
+}
+
+}  // namespace
+
+RegistrationOptions RegistrationOptions::FromConfig(const ConfigNode& c) {
+  c.ExpectKeys({"noise", "residual", "max_iterations", "max_solver_iterations", "translation_tolerance",
+                "rotation_tolerance", "shadow_points", "shadow_edge_distance", "shadow_distance", "shadow_sigmas", "max_distance", "max_incidence_deg",
+                "loss", "loss_scale", "step_sigma_translation", "step_sigma_rotation", "prior_sigma_translation", "prior_sigma_rotation", "unconstrained_std",
+                "num_threads"});
+  RegistrationOptions o;
+  if (auto n = c.Find("noise")) o.noise = LaserNoiseModel::FromConfig(*n);
+  if (auto r = c.Find("residual")) {
+    const auto v = r->As<std::string>();
+    if (v == "closest") o.residual = RegistrationResidual::kClosest;
+    else if (v == "ray") o.residual = RegistrationResidual::kRay;
+    else r->Fail("one of: closest (eq. 7, the paper), ray (range to the face the ray hits)");
+  }
+  c.ReadPositive("max_iterations", o.max_iterations);
+  c.ReadPositive("max_solver_iterations", o.max_solver_iterations);
+  c.ReadPositive("translation_tolerance", o.translation_tolerance);
+  c.ReadPositive("rotation_tolerance", o.rotation_tolerance);
+  c.Read("shadow_points", o.shadow_points);
+  c.ReadNonNegative("shadow_edge_distance", o.shadow_edge_distance);
+  c.ReadNonNegative("shadow_distance", o.shadow_distance);
+  c.ReadNonNegative("shadow_sigmas", o.shadow_sigmas);
+  c.ReadNonNegative("max_distance", o.max_distance);
+  if (c.Has("max_incidence_deg")) {
+    double deg = 90.0;
+    c.ReadInRange("max_incidence_deg", deg, 0.0, 90.0);
+    o.max_incidence = deg * M_PI / 180.0;
+  }
+  if (auto l = c.Find("loss")) {
+    const auto v = l->As<std::string>();
+    if (v == "none") o.loss = RobustLoss::kNone;
+    else if (v == "huber") o.loss = RobustLoss::kHuber;
+    else if (v == "cauchy") o.loss = RobustLoss::kCauchy;
+    else l->Fail("one of: none, huber, cauchy");
+  }
+  c.ReadPositive("loss_scale", o.loss_scale);
+  c.ReadPositive("step_sigma_translation", o.step_sigma_translation);
+  c.ReadPositive("step_sigma_rotation", o.step_sigma_rotation);
+  c.ReadPositive("prior_sigma_translation", o.prior_sigma_translation);
+  c.ReadPositive("prior_sigma_rotation", o.prior_sigma_rotation);
+  c.ReadPositive("unconstrained_std", o.unconstrained_std);
+  c.ReadPositive("num_threads", o.num_threads);
+  return o;
+}
+
+const char* ToString(RegistrationStatus status) {
+  switch (status) {
+    case RegistrationStatus::kConverged: return "converged";
+    case RegistrationStatus::kMaxIterations: return "max_iterations";
+    case RegistrationStatus::kNoPoints: return "no_points";
+    case RegistrationStatus::kSolverFailed: return "solver_failed";
+  }
+  return "unknown";
+}
+
+const RegisteredBody* RegistrationSummary::Find(const std::string& name) const {
+  for (const auto& b : bodies)
+    if (b.name == name) return &b;
+  return nullptr;
+}
+
+std::string RegistrationSummary::BriefReport() const {
+  std::string s = fmt::format("registration {} ({}): {} points, {} inliers, {} shadow points removed ({} flagged), "
+                              "{} outliers, {} grazing, rms {:.2f} sigma, {} steps, {:.3f} s",
+                              ToString(status), message, num_points, num_inliers, num_shadow_removed,
+                              num_shadow_flagged, num_outliers, num_grazing, rms_whitened, iterations, seconds);
+  for (const auto& b : bodies) {
+    const auto v = XyzRpyFromPose(b.T_base_body);
+    s += fmt::format("\n  {} {}: [{:.4f} {:.4f} {:.4f}] m, [{:.3f} {:.3f} {:.3f}] deg, {} inliers, std "
+                     "[{:.2f} {:.2f} {:.2f}] mm [{:.3f} {:.3f} {:.3f}] deg",
+                     b.name, b.free ? "free" : "fixed", v[0], v[1], v[2], v[3] * 180 / M_PI, v[4] * 180 / M_PI,
+                     v[5] * 180 / M_PI, b.inliers, 1e3 * std::sqrt(b.covariance(0, 0)), 1e3 * std::sqrt(b.covariance(1, 1)),
+                     1e3 * std::sqrt(b.covariance(2, 2)), std::sqrt(b.covariance(3, 3)) * 180 / M_PI,
+                     std::sqrt(b.covariance(4, 4)) * 180 / M_PI, std::sqrt(b.covariance(5, 5)) * 180 / M_PI);
+  }
+  for (const auto& w : warnings) s += "\n  warning: " + w;
+  return s;
+}
+
+RegistrationSummary Register(const std::vector<RayPoint>& cloud, const std::vector<RegistrationBody>& bodies,
+                             const RegistrationOptions& options) {
+  internal::PoseProblemInput input;
+  input.cloud = &cloud;
+  return internal::SolvePoseProblem(input, bodies, options).summary;
+}
+
+std::vector<RegistrationBody> SiteBodies(const Site& site, const Pose3& T_site_base_guess, bool separate_ground) {
+  const Pose3 T_base_site = T_site_base_guess.inverse();
+  std::vector<RigidObject> objects = site.Objects();
+  std::vector<RegistrationBody> bodies;
+  RegistrationBody rest{"site", T_base_site, {}, true};
+  for (auto& o : objects) {
+    const bool is_ground = o.name == "ground";
+    if (is_ground && separate_ground) bodies.push_back({"ground", T_base_site, {o}, true});
+    else rest.parts.push_back(o);
+  }
+  bodies.push_back(std::move(rest));
+  return bodies;
+}
+
+SiteLocalization LocalizeInSite(const std::vector<RayPoint>& cloud, const Site& site, const Pose3& T_site_base_guess,
+                                const RegistrationOptions& options, bool separate_ground) {
+  SiteLocalization out;
+  out.registration = Register(cloud, SiteBodies(site, T_site_base_guess, separate_ground), options);
+  const RegisteredBody* body = out.registration.Find("site");
+  out.T_site_base = body->T_base_body.inverse();
+  out.covariance = InverseCovariance(body->T_base_body, body->covariance);
+  return out;
+}
+
+Matrix6d InverseCovariance(const Pose3& T, const Matrix6d& covariance) {
+  // T = (Exp(w) R, t + d)  =>  T^-1 = (Exp(-R^T w) R^T, -R^T t - R^T d - R^T [t]x w).
+  const Eigen::Matrix3d Rt = T.linear().transpose();
+  Matrix6d J = Matrix6d::Zero();
+  J.block<3, 3>(0, 0) = -Rt;
+  J.block<3, 3>(0, 3) = -Rt * Skew(T.translation());
+  J.block<3, 3>(3, 3) = -Rt;
+  return J * covariance * J.transpose();
+}
+
+std::vector<std::string> UnconstrainedDirections(const Matrix6d& information, double extent, double max_std) {
+  // Rotations scaled to displacements at the body's extent, so one threshold serves both.
+  const double lever = extent > 0.0 ? extent : 1.0;
+  Eigen::Matrix<double, 6, 1> d;
+  d << 1, 1, 1, 1 / lever, 1 / lever, 1 / lever;
+  const Matrix6d scaled = d.asDiagonal() * information * d.asDiagonal();
+  Eigen::SelfAdjointEigenSolver<Matrix6d> eig(0.5 * (scaled + scaled.transpose()));
+  const double min_information = 1.0 / (max_std * max_std);
+  std::vector<int> weak;
+  for (int k = 0; k < 6; ++k)
+    if (eig.eigenvalues()[k] < min_information) weak.push_back(k);
+  if (weak.empty()) return {};
+  Eigen::MatrixXd N(6, static_cast<Eigen::Index>(weak.size()));
+  for (std::size_t j = 0; j < weak.size(); ++j) N.col(static_cast<Eigen::Index>(j)) = eig.eigenvectors().col(weak[j]);
+
+  static const char* kAxisNames[6] = {"translation along x", "translation along y", "translation along z",
+                                      "rotation about x",    "rotation about y",    "rotation about z"};
+  std::vector<std::string> named;
+  for (int k = 0; k < 6; ++k)
+    if (N.row(k).squaredNorm() > 0.9) named.push_back(kAxisNames[k]);
+  if (named.size() == weak.size()) return named;
+  std::vector<std::string> out;
+  for (std::size_t j = 0; j < weak.size(); ++j) {
+    const Eigen::VectorXd v = N.col(static_cast<Eigen::Index>(j));
+    out.push_back(fmt::format("translation ({:.2f}, {:.2f}, {:.2f}) + rotation ({:.2f}, {:.2f}, {:.2f}) x {:.2f} m",
+                              v[0], v[1], v[2], v[3], v[4], v[5], lever));
+  }
+  return out;
+}
+
+}  // namespace ifab

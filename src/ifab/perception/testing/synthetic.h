@@ -1,0 +1,131 @@
+#pragma once
+/// \file
+/// Synthetic laser data for perception's own tests and benchmark: beams ray-cast against a Scene
+/// of known bodies, with range noise along the ray, beam-width noise across it (as a jitter of
+/// the beam direction) and optional mixed pixels at depth edges. Not the simulator (src/ifab/sim
+/// owns ground truth for the experiments); perception never includes that.
+
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <vector>
+
+#include "ifab/core/random.h"
+#include "ifab/model/robot_model.h"
+#include "ifab/msgs/msgs.h"
+#include "ifab/perception/cloud.h"
+#include "ifab/perception/laser_model.h"
+#include "ifab/perception/scene.h"
+
+namespace ifab::testing {
+
+/// A Hokuyo UTM-30LX-like scanner.
+struct SyntheticLaser {
+  int beams{1081};
+  double angle_min{-0.75 * M_PI};
+  double angle_increment{0.25 * M_PI / 180.0};
+  double scan_period{0.025};               ///< [s] 40 Hz
+  double time_increment{0.025 / 1440.0};   ///< [s] between beams
+  double range_min{0.1};
+  double range_max{30.0};
+  LaserNoiseModel noise;
+  bool noisy{true};
+  bool mixed_pixels{false};  ///< beams straddling a depth edge return a range between the surfaces
+  double mixed_gap{0.03};    ///< [m] range difference across the beam that makes a mixed pixel
+};
+
+/// One beam from the laser pose along angle a (laser frame x-y plane). NaN if nothing is hit.
+/// Sets *mixed if the return is a mixed pixel.
+inline double CastBeam(const Scene& world, const Pose3& T_base_laser, double a, const SyntheticLaser& laser,
+                       RandomStream& rng, bool* mixed = nullptr) {
+  if (mixed) *mixed = false;
+  const Eigen::Vector3d o = T_base_laser.translation();
+  auto cast = [&](double angle, double tilt) {
+    const Eigen::Vector3d d_laser(std::cos(angle) * std::cos(tilt), std::sin(angle) * std::cos(tilt), std::sin(tilt));
+    const auto hit = world.CastRay(o, T_base_laser.linear() * d_laser, laser.range_max);
+    return hit ? hit->t : std::numeric_limits<double>::quiet_NaN();
+  };
+  const double r0 = cast(a, 0.0);
+  if (!std::isfinite(r0)) return r0;
+  const double beam = laser.noise.SigmaAcross(r0) / r0;  // angular beam-width sigma
+  if (laser.mixed_pixels) {
+    const double r1 = cast(a - 2.0 * beam, 0.0), r2 = cast(a + 2.0 * beam, 0.0);
+    if (std::isfinite(r1) && std::isfinite(r2) && std::abs(r1 - r2) > laser.mixed_gap) {
+      if (mixed) *mixed = true;
+      return std::min(r1, r2) + rng.Uniform(0.15, 0.85) * std::abs(r1 - r2);
+    }
+  }
+  if (!laser.noisy) return r0;
+  double r = cast(a + rng.Normal(beam), rng.Normal(beam));
+  if (!std::isfinite(r)) r = r0;
+  return r + rng.Normal(laser.noise.sigma_along);
+}
+
+/// A scan starting at t0; the laser pose is evaluated at each beam's own time.
+inline LaserScan SynthesizeScan(const Scene& world, const std::function<Pose3(double)>& T_base_laser_at, double t0,
+                                const SyntheticLaser& laser, RandomStream& rng, std::vector<char>* mixed = nullptr) {
+  LaserScan scan;
+  scan.stamp.t = t0;
+  scan.angle_min = laser.angle_min;
+  scan.angle_increment = laser.angle_increment;
+  scan.time_increment = laser.time_increment;
+  scan.range_min = laser.range_min;
+  scan.range_max = laser.range_max;
+  scan.ranges.resize(static_cast<std::size_t>(laser.beams));
+  for (int i = 0; i < laser.beams; ++i) {
+    bool m = false;
+    scan.ranges[static_cast<std::size_t>(i)] =
+        CastBeam(world, T_base_laser_at(scan.BeamTime(static_cast<std::size_t>(i))), scan.Angle(static_cast<std::size_t>(i)),
+                 laser, rng, &m);
+    if (mixed) mixed->push_back(m);
+  }
+  return scan;
+}
+
+/// The cloud (base frame) of a laser moving along T_base_laser_at from t0 to t1. `mixed` (if
+/// given) receives one flag per returned point.
+inline std::vector<RayPoint> SynthesizeCloud(const Scene& world, const std::function<Pose3(double)>& T_base_laser_at,
+                                             double t0, double t1, const SyntheticLaser& laser, RandomStream& rng,
+                                             std::vector<char>* mixed = nullptr) {
+  std::vector<RayPoint> cloud;
+  for (double t = t0; t < t1; t += laser.scan_period) {
+    std::vector<char> m;
+    const LaserScan scan = SynthesizeScan(world, T_base_laser_at, t, laser, rng, &m);
+    for (std::size_t i = 0; i < scan.size(); ++i) {
+      if (!scan.IsValid(i)) continue;
+      const Pose3 T = T_base_laser_at(scan.BeamTime(i));
+      cloud.push_back({T * scan.Point(i), T.translation()});
+      if (mixed) mixed->push_back(m[i]);
+    }
+  }
+  return cloud;
+}
+
+/// Scans and joint states of an arm moving linearly in joint space from q0 to q1 over `duration`
+/// (host times from t = 0), the laser on the flange at T_tool0_laser.
+struct SyntheticSweep {
+  std::vector<LaserScan> scans;
+  std::vector<JointState> joints;
+};
+
+inline SyntheticSweep SynthesizeArmSweep(const Scene& world, const RobotModel& robot, const Pose3& T_tool0_laser,
+                                         const Vector6d& q0, const Vector6d& q1, double duration,
+                                         const SyntheticLaser& laser, RandomStream& rng, double joint_rate = 250.0) {
+  SyntheticSweep sweep;
+  auto q_at = [&](double t) -> Vector6d { return q0 + std::clamp(t / duration, 0.0, 1.0) * (q1 - q0); };
+  auto laser_at = [&](double t) {
+    return robot.T_base_arm_base * robot.ArmForwardKinematics(q_at(t)) * T_tool0_laser;
+  };
+  const double dt = 1.0 / joint_rate;
+  for (double t = -dt; t <= duration + laser.scan_period + dt; t += dt) {
+    JointState j;
+    j.stamp.t = t;
+    j.q = q_at(t);
+    sweep.joints.push_back(j);
+  }
+  for (double t = 0.0; t + laser.scan_period <= duration; t += laser.scan_period)
+    sweep.scans.push_back(SynthesizeScan(world, laser_at, t, laser, rng));
+  return sweep;
+}
+
+}  // namespace ifab::testing

@@ -1,0 +1,375 @@
+#include "ifab/sequencer/mission.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+
+#include "ifab/core/angles.h"
+#include "ifab/core/config.h"
+
+namespace ifab::sequencer {
+namespace {
+
+Pose2 Pose2Of(const Pose3& p) {
+  const auto v = XyzRpyFromPose(p);
+  return Pose2(v[0], v[1], v[5]);
+}
+
+}  // namespace
+
+MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
+  c.ExpectKeys({"control_period", "drive_timeout_factor", "drive_timeout_margin", "settle_time", "plan_attempts",
+                "max_sweeps", "min_inliers", "max_localization_std_m", "max_localization_std_deg",
+                "max_localization_jump_m", "scan_distance", "scan_elevation_deg", "sweep_half_angle_deg",
+                "sweep_speed_deg_s", "park_joints_deg"});
+  MissionOptions o;
+  c.ReadPositive("control_period", o.control_period);
+  c.ReadPositive("drive_timeout_factor", o.drive_timeout_factor);
+  c.ReadNonNegative("drive_timeout_margin", o.drive_timeout_margin);
+  c.ReadNonNegative("settle_time", o.settle_time);
+  c.ReadPositive("plan_attempts", o.plan_attempts);
+  c.ReadPositive("max_sweeps", o.max_sweeps);
+  c.ReadNonNegative("min_inliers", o.min_inliers);
+  c.ReadPositive("max_localization_std_m", o.max_localization_std_m);
+  c.ReadPositive("max_localization_std_deg", o.max_localization_std_deg);
+  c.ReadPositive("max_localization_jump_m", o.max_localization_jump_m);
+  c.ReadPositive("scan_distance", o.scan_distance);
+  c.ReadInRange("scan_elevation_deg", o.scan_elevation_deg, 0.0, 90.0);
+  c.ReadPositive("sweep_half_angle_deg", o.sweep_half_angle_deg);
+  c.ReadPositive("sweep_speed_deg_s", o.sweep_speed_deg_s);
+  if (auto q = c.Find("park_joints_deg")) {
+    const auto v = q->AsNumbers(6);
+    for (int i = 0; i < 6; ++i) o.q_park[i] = DegToRad(v[static_cast<std::size_t>(i)]);
+  }
+  return o;
+}
+
+Mission::Mission(hal::Robot& robot, MissionComponents components, MissionOptions options, std::uint64_t seed)
+    : robot_(robot),
+      c_(std::move(components)),
+      o_(options),
+      rng_(seed),
+      sync_base_laser_(c_.clock_sync),
+      sync_arm_laser_(c_.clock_sync),
+      sync_gyro_(c_.clock_sync),
+      sync_arm_(c_.clock_sync),
+      workpiece_(c_.site) {
+  const Pose3& T = c_.robot.T_base_base_laser;
+  estimator_ = std::make_unique<base::BaseStateEstimator>(c_.estimator, Pose2Of(T));
+  arm_ = std::make_unique<arm::ArmPrimitives>(c_.robot, c_.arm);
+  workpiece_.bricks.clear();
+}
+
+Mission::~Mission() = default;
+
+void Mission::Progress(const std::string& text) {
+  spdlog::info("{}", text);
+  if (on_progress) on_progress(text);
+}
+
+Pose3 Mission::Pose3Of(const Pose2& p) const {
+  return PoseFromXyzRpy(p.x, p.y, c_.site.ground_z, 0, 0, p.theta);
+}
+
+void Mission::Start(const Pose2& T_site_base, const Vector6d& q) {
+  T_site_base_ = T_site_base;
+  q_ = q;
+  last_scan_mid_ = robot_.Now();
+  estimator_->Reset(T_site_base, last_scan_mid_);
+}
+
+void Mission::PumpSensors() {
+  // Clock sync first: pulses, then every packet's device stamp mapped to host time.
+  for (const SyncPulse& p : robot_.TakeSyncPulses()) {
+    switch (p.device) {
+      case DeviceId::kBaseLaser: sync_base_laser_.AddPulse(p); break;
+      case DeviceId::kArmLaser: sync_arm_laser_.AddPulse(p); break;
+      case DeviceId::kGyro: sync_gyro_.AddPulse(p); break;
+      case DeviceId::kArm: sync_arm_.AddPulse(p); break;
+    }
+  }
+  // A packet is used once its device's clock is synced, and only if it is newer than the last
+  // one used (before the first pulse pair there is no trustworthy time for it).
+  auto synced = [](DeviceClockSync& sync, Stamp& stamp, Seconds& last) {
+    sync.AddPacket(stamp);
+    if (!sync.Apply(stamp) || stamp.t <= last) return false;
+    last = stamp.t;
+    return true;
+  };
+  std::vector<GyroSample> gyro;
+  for (auto& g : robot_.TakeGyroSamples())
+    if (synced(sync_gyro_, g.stamp, last_gyro_)) gyro.push_back(g);
+  std::vector<LaserScan> scans;
+  for (auto& s : robot_.TakeLaserScans(DeviceId::kBaseLaser))
+    if (synced(sync_base_laser_, s.stamp, last_base_scan_)) scans.push_back(std::move(s));
+  for (auto& s : robot_.TakeLaserScans(DeviceId::kArmLaser))
+    if (synced(sync_arm_laser_, s.stamp, last_arm_scan_)) arm_scans_.push_back(std::move(s));
+  for (auto& j : robot_.TakeJointStates())
+    if (synced(sync_arm_, j.stamp, last_joint_state_)) joint_states_.push_back(j);
+  // Gyro samples up to each scan go in before it (the estimator integrates between scans).
+  std::size_t gi = 0;
+  for (const auto& scan : scans) {
+    const double t_scan = scan.MidTime();
+    while (gi < gyro.size() && gyro[gi].stamp.t <= t_scan) estimator_->AddGyro(gyro[gi++]);
+    const base::BaseEstimate& e = estimator_->AddScan(scan);
+    last_scan_mid_ = t_scan;
+    if (e.IsUsable() || e.status == base::EstimateStatus::kTooFewPoints) T_site_base_ = e.T_world_base;
+    if (trace_) trace_->push_back({e.t, e.T_world_base});
+  }
+  for (; gi < gyro.size(); ++gi) estimator_->AddGyro(gyro[gi]);
+}
+
+base::PlanningScene Mission::Scene() const {
+  base::PlanningScene scene;
+  scene.boundary = workpiece_.boundary;
+  for (const auto* group : {&workpiece_.walls, &workpiece_.obstacles, &workpiece_.bricks}) {
+    for (const auto& b : *group) {
+      scene.obstacles.push_back(Footprint(b));
+      scene.obstacle_names.push_back(b.name);
+    }
+  }
+  return scene;
+}
+
+bool Mission::RunArm(const arm::PrimitiveResult& steps, const std::string& what) {
+  if (!steps.ok) {
+    StopSafely(fmt::format("{}: {}", what, steps.message));
+    return false;
+  }
+  const arm::ExecuteResult r = arm::ExecuteSteps(robot_, steps.steps);
+  PumpSensors();
+  if (!r.ok) {
+    StopSafely(fmt::format("{}: {}", what, r.message));
+    return false;
+  }
+  q_ = steps.q_end;
+  return true;
+}
+
+void Mission::StopSafely(const std::string& why) {
+  robot_.CommandTracks({robot_.Now(), 0.0, 0.0});
+  if (!stopped_) {
+    stopped_ = true;
+    stop_reason_ = why;
+    spdlog::warn("mission stopped: {}", why);
+    // Park the arm if it can be planned; keep the vacuum on so a held brick is not dropped.
+    const auto park = arm_->MoveToJoints(q_, o_.q_park);
+    if (park.ok) arm::ExecuteSteps(robot_, park.steps);
+  }
+}
+
+bool Mission::Reposition(const BuildingPosition& goal, VisitLog& log) {
+  log.desired = goal.T_site_base;
+  log.start_estimate = T_site_base_;
+  // The arm is parked while driving.
+  if ((q_ - o_.q_park).cwiseAbs().maxCoeff() > 1e-3) {
+    Progress(fmt::format("{}: parking the arm", goal.name));
+    if (!RunArm(arm_->MoveToJoints(q_, o_.q_park), "park the arm")) return false;
+  }
+
+  Progress(fmt::format("{}: planning the base trajectory", goal.name));
+  const base::StompBasePlanner planner(Scene(), c_.base_geometry, c_.planner);
+  for (int attempt = 0; attempt < o_.plan_attempts; ++attempt) {
+    log.plan = planner.Plan(T_site_base_, goal.T_site_base, rng_.Derive(static_cast<std::uint64_t>(attempt)));
+    if (log.plan.IsUsable()) break;
+    spdlog::warn("plan to {} failed ({}), attempt {}", goal.name, log.plan.BriefReport(), attempt + 1);
+  }
+  if (!log.plan.IsUsable()) {
+    log.failure = "no plan: " + log.plan.BriefReport();
+    return false;
+  }
+
+  Progress(fmt::format("{}: driving ({:.1f} m planned)", goal.name, log.plan.trajectory.Length()));
+  base::BaseTrajectoryController controller(c_.controller);
+  controller.SetTrajectory(log.plan.trajectory);
+  const Seconds deadline =
+      robot_.Now() + o_.drive_timeout_factor * log.plan.trajectory.duration + o_.drive_timeout_margin;
+  trace_ = &log.estimated;
+  bool arrived = false;
+  while (robot_.Now() < deadline) {
+    robot_.Wait(o_.control_period);
+    PumpSensors();
+    const base::BaseControllerOutput u = controller.Update(T_site_base_, robot_.Now());
+    if (u.done) {
+      arrived = true;
+      break;
+    }
+    TrackCommand command;
+    double v = 0, omega = 0;
+    base::BaseTrajectoryController::ToTrackSpeeds(u.v, u.omega, c_.controller.track_gauge,
+                                                  c_.controller.max_track_speed, &v, &omega, &command);
+    command.t = robot_.Now();
+    robot_.CommandTracks(command);
+  }
+  robot_.CommandTracks({robot_.Now(), 0.0, 0.0});
+  for (double t = 0; t < o_.settle_time; t += o_.control_period) {
+    robot_.Wait(o_.control_period);
+    PumpSensors();
+  }
+  trace_ = nullptr;
+  log.end_estimate = T_site_base_;
+  if (!arrived) spdlog::warn("{}: the controller did not reach the goal tolerance in time", goal.name);
+  return true;
+}
+
+bool Mission::Localize(VisitLog& log) {
+  if (workpiece_.bricks.empty()) {  // nothing built yet: the start pose is all there is
+    log.localized = false;
+    return true;
+  }
+  for (int sweep = 0; sweep < o_.max_sweeps; ++sweep) {
+    Progress(fmt::format("{}: scanning the workpiece (sweep {})", log.position, sweep + 1));
+    // Predict where the top of the workpiece is, and look at it along a diagonal of the brick
+    // so that its top and two side faces are seen.
+    const Pose3 T_site_base = Pose3Of(T_site_base_);
+    const SiteBox& top = workpiece_.bricks.back();
+    const Eigen::Vector3d p_top = top.T_site_box * Eigen::Vector3d(0, 0, 0.5 * top.box.size.z());
+    const Eigen::Vector2d to_robot = (T_site_base.translation() - p_top).head<2>().normalized();
+    const double brick_yaw = XyzRpyFromPose(top.T_site_box)[5];
+    double best = -2;
+    Eigen::Vector2d diagonal = to_robot;
+    for (int k = 0; k < 4; ++k) {
+      const double a = brick_yaw + kPi / 4 + k * kPi / 2 + (sweep % 2) * 0.15;  // vary between sweeps
+      const Eigen::Vector2d d(std::cos(a), std::sin(a));
+      if (d.dot(to_robot) > best) {
+        best = d.dot(to_robot);
+        diagonal = d;
+      }
+    }
+    const double el = DegToRad(o_.scan_elevation_deg);
+    const Eigen::Vector3d p_laser = p_top + o_.scan_distance * Eigen::Vector3d(std::cos(el) * diagonal.x(),
+                                                                             std::cos(el) * diagonal.y(), std::sin(el));
+    const Eigen::Vector3d look = (p_top - p_laser).normalized();
+    const Eigen::Vector3d x_tool = look.cross(Eigen::Vector3d::UnitZ()).normalized();  // scan plane vertical
+    Pose3 T_site_tool0 = Pose3::Identity();
+    T_site_tool0.linear().col(0) = x_tool;
+    T_site_tool0.linear().col(1) = look.cross(x_tool);
+    T_site_tool0.linear().col(2) = look;
+    // The laser, not the flange, is at p_laser: shift the flange back by the mount.
+    T_site_tool0.translation() = p_laser - T_site_tool0.linear() * c_.T_tool0_arm_laser.translation();
+    const Pose3 T_arm_base_tool0 =
+        (T_site_base * c_.robot.T_base_arm_base).inverse(Eigen::Isometry) * T_site_tool0;
+    const auto ik = arm_->ik().Solve(T_arm_base_tool0, q_);
+    if (!ik.ok()) {
+      log.failure = "scan pose out of reach: " + ik.message;
+      continue;
+    }
+    const double half = DegToRad(o_.sweep_half_angle_deg);
+    // To the scan pose (joint 1 turned to the sweep's start), then sweep joint 1 across it.
+    Vector6d q_start = ik.q;
+    q_start[0] -= half;
+    arm::PrimitiveResult sweep_steps = arm_->MoveToJoints(q_, q_start);
+    if (sweep_steps.ok)
+      sweep_steps.Append(arm_->SweepJoint(q_start, 0, q_start[0], ik.q[0] + half, DegToRad(o_.sweep_speed_deg_s)));
+    if (!sweep_steps.ok) {
+      log.failure = "sweep: " + sweep_steps.message;
+      continue;
+    }
+    arm_scans_.clear();
+    joint_states_.clear();
+    PumpSensors();
+    arm_scans_.clear();
+    joint_states_.clear();
+    if (!RunArm(sweep_steps, "scan sweep")) return false;
+    ++log.sweeps;
+
+    log.cloud = AssembleCloud(arm_scans_, joint_states_, c_.robot, c_.T_tool0_arm_laser, c_.assembly);
+    Site model = workpiece_;  // register against the workpiece (the stack as built) and the ground
+    model.walls.clear();
+    model.obstacles.clear();
+    const SiteLocalization loc = LocalizeInSite(log.cloud, model, T_site_base, c_.registration, true);
+    log.registration_report = loc.registration.BriefReport();
+    // Trust is judged on the workpiece's pose in the base frame: that is what placing a brick
+    // uses (T_site_base's position std is mostly the workpiece's yaw std times the distance).
+    const RegisteredBody* workpiece = loc.registration.Find("site");
+    const double std_xy = workpiece ? std::sqrt(std::max(workpiece->covariance(0, 0), workpiece->covariance(1, 1))) : 1e9;
+    const double std_yaw = workpiece ? RadToDeg(std::sqrt(workpiece->covariance(5, 5))) : 1e9;
+    const Pose2 localized = Pose2Of(loc.T_site_base);
+    const double jump = TranslationDistance(localized, T_site_base_);
+    std::string why;
+    if (!loc.IsUsable()) why = "registration failed";
+    else if (!workpiece || workpiece->inliers < o_.min_inliers)
+      why = fmt::format("{} points on the workpiece", workpiece ? workpiece->inliers : 0);
+    else if (std_xy > o_.max_localization_std_m) why = fmt::format("position std {:.4f} m", std_xy);
+    else if (std_yaw > o_.max_localization_std_deg) why = fmt::format("heading std {:.3f} deg", std_yaw);
+    else if (jump > o_.max_localization_jump_m) why = fmt::format("correction of {:.3f} m", jump);
+    for (const auto& b : loc.registration.bodies)
+      if (b.name != "ground" && !b.unconstrained.empty() && why.empty()) why = "unconstrained: " + b.unconstrained.front();
+    if (!why.empty()) {
+      spdlog::warn("{}: registration not trusted ({}); {}", log.position, why, log.registration_report);
+      for (const auto& b : loc.registration.bodies) {
+        std::string dirs;
+        for (const auto& d : b.unconstrained) dirs += d + "; ";
+        spdlog::warn("  body {}: {} inliers, std diag [{:.4f} {:.4f} {:.4f} {:.4f} {:.4f} {:.4f}] {}", b.name,
+                     b.inliers, std::sqrt(b.covariance(0, 0)), std::sqrt(b.covariance(1, 1)),
+                     std::sqrt(b.covariance(2, 2)), std::sqrt(b.covariance(3, 3)), std::sqrt(b.covariance(4, 4)),
+                     std::sqrt(b.covariance(5, 5)), dirs);
+      }
+      log.failure = "registration not trusted: " + why;
+      continue;
+    }
+    log.failure.clear();
+    log.localized = true;
+    log.localized_pose = localized;
+    log.T_site_base_at_scan = T_site_base;
+    T_site_base_ = localized;
+    // The registered pose holds from the scan on (the base stood still): reset at the last scan
+    // the estimator has seen, so the next one follows it in time.
+    estimator_->Reset(localized, last_scan_mid_, /*keep_references=*/true);
+    return true;
+  }
+  StopSafely(fmt::format("{}: no trusted localization after {} sweeps ({})", log.position, log.sweeps, log.failure));
+  return false;
+}
+
+bool Mission::PlaceBrick(int k, VisitLog& log) {
+  const Pose3 T_site_base = Pose3Of(T_site_base_);
+  const Pose3 T_site_feeder = T_site_base * o_.T_base_feeder;
+  const Pose3 T_site_goal = workpiece_.DesignedBrickPose(k);
+  Progress(fmt::format("{}: picking brick {} from the feeder", log.position, k + 1));
+  if (!RunArm(arm_->PickBrick(q_, T_site_base, T_site_feeder, c_.site.brick), "pick brick")) return false;
+  Progress(fmt::format("{}: placing brick {}", log.position, k + 1));
+  if (!RunArm(arm_->PlaceBrick(q_, T_site_base, T_site_goal, c_.site.brick), "place brick")) return false;
+  workpiece_.bricks.push_back({fmt::format("brick_{}", k), T_site_goal, c_.site.brick});
+  log.bricks_placed.push_back(k);
+  ++bricks_placed_;
+  return true;
+}
+
+std::vector<VisitLog> Mission::Run(const BuildingPlan& plan) {
+  std::vector<VisitLog> logs;
+  int brick = 0;
+  for (std::size_t v = 0; v < plan.visits.size() && !stopped_; ++v) {
+    const auto& visit = plan.visits[v];
+    const BuildingPosition& position = plan.positions[static_cast<std::size_t>(visit.position)];
+    VisitLog log;
+    log.visit = static_cast<int>(v);
+    log.position = position.name;
+    log.t_start = robot_.Now();
+    Progress(fmt::format("position {} of {} ({})", v, plan.Repositionings(), position.name));
+    if (v > 0) {
+      if (!Reposition(position, log)) {
+        log.t_end = robot_.Now();
+        logs.push_back(std::move(log));
+        if (stopped_) break;
+        continue;  // skip this position (reason logged)
+      }
+      if (!Localize(log)) {
+        log.t_end = robot_.Now();
+        logs.push_back(std::move(log));
+        break;
+      }
+    } else {
+      log.desired = log.start_estimate = log.end_estimate = T_site_base_;
+    }
+    for (int b = 0; b < visit.bricks && !stopped_; ++b) PlaceBrick(brick++, log);
+    log.t_end = robot_.Now();
+    logs.push_back(std::move(log));
+  }
+  if (!stopped_ && (q_ - o_.q_park).cwiseAbs().maxCoeff() > 1e-3) RunArm(arm_->MoveToJoints(q_, o_.q_park), "park the arm");
+  robot_.CommandTracks({robot_.Now(), 0.0, 0.0});
+  return logs;
+}
+
+}  // namespace ifab::sequencer

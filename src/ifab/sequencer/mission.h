@@ -1,0 +1,141 @@
+#pragma once
+/// \file
+/// The building sequencer's mission (paper Fig. 2): for every building position it asks the base
+/// planner for a trajectory, drives it with the controller on the estimator's poses, predicts
+/// where the workpiece is, sweeps the arm laser over it, registers the cloud against the model
+/// of what is built so far, takes the registered pose as the robot's pose (and the estimator's
+/// new start), then picks bricks from the on-board feeder and places them. It talks to the robot
+/// only through hal::Robot, and never to ground truth.
+///
+/// Failures are outcomes, not crashes: a plan that fails is retried, then the position skipped;
+/// a registration that is not trusted triggers another sweep, and after a bounded number the
+/// mission stops safely (arm parked, tracks stopped) instead of placing a brick on a pose it
+/// does not trust.
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "ifab/arm/primitives.h"
+#include "ifab/base/controller/trajectory_controller.h"
+#include "ifab/base/estimator/base_state_estimator.h"
+#include "ifab/base/planner/stomp_planner.h"
+#include "ifab/hal/robot.h"
+#include "ifab/model/robot_model.h"
+#include "ifab/model/site.h"
+#include "ifab/perception/registration.h"
+#include "ifab/perception/scan_assembly.h"
+#include "ifab/sequencer/building_plan.h"
+#include "ifab/sync/clock_sync.h"
+
+namespace ifab::sequencer {
+
+struct MissionOptions {
+  double control_period{0.025};      ///< [s] controller rate (the base laser's 40 Hz)
+  double drive_timeout_factor{3.0};  ///< give up driving after this times the planned duration ...
+  double drive_timeout_margin{20.0}; ///< ... plus this [s]
+  double settle_time{1.0};           ///< [s] standstill after driving, before scanning
+  int plan_attempts{3};              ///< planner calls (different seeds) before skipping a position
+  int max_sweeps{3};                 ///< sweeps per localization before the mission stops
+  int min_inliers{300};              ///< registration with fewer points on the workpiece is not trusted
+  double max_localization_std_m{0.003};   ///< ... nor one whose workpiece position std (base frame) exceeds this
+  double max_localization_std_deg{1.0};   ///< ... or workpiece yaw std
+  double max_localization_jump_m{0.3};    ///< ... nor a correction larger than this
+  double scan_distance{0.8};         ///< [m] arm laser to the top of the workpiece
+  double scan_elevation_deg{50.0};   ///< view direction's angle below horizontal
+  double sweep_half_angle_deg{12.0}; ///< the sweep turns joint 1 this far each side
+  double sweep_speed_deg_s{8.0};
+  Vector6d q_park{Vector6d::Zero()}; ///< arm configuration while driving [rad]
+  Pose3 T_base_feeder{Pose3::Identity()};  ///< where the on-board feeder presents a brick
+
+  static MissionOptions FromConfig(const ConfigNode& config);
+};
+
+/// Everything the mission uses, built from configs by the caller.
+struct MissionComponents {
+  RobotModel robot;
+  Site site;                         ///< the site as designed, without bricks
+  base::BaseGeometry base_geometry;
+  base::StompPlannerOptions planner;
+  base::EstimatorOptions estimator;
+  base::BaseControllerOptions controller;
+  arm::ArmOptions arm;
+  ScanAssemblyOptions assembly;
+  RegistrationOptions registration;
+  ClockSyncOptions clock_sync;
+  Pose3 T_tool0_arm_laser;           ///< the arm laser's mount (calibrated, or the design value)
+};
+
+/// What happened at one visit, for the results and for Fig. 6.
+struct VisitLog {
+  int visit{0};
+  std::string position;
+  Pose2 desired;                     ///< building position requested
+  Pose2 start_estimate;              ///< estimated pose when the maneuver began
+  base::PlanResult plan;             ///< (trajectory kept for Fig. 6)
+  std::vector<Stamped<Pose2>> estimated;   ///< estimator poses while driving
+  Pose2 end_estimate;                ///< estimator's pose at the end of the maneuver
+  bool localized{false};
+  Pose2 localized_pose;              ///< T_site_base from registration
+  int sweeps{0};
+  std::string registration_report;
+  std::vector<RayPoint> cloud;       ///< the last assembled sweep (base frame)
+  Pose3 T_site_base_at_scan{Pose3::Identity()};
+  std::vector<int> bricks_placed;    ///< brick indices placed at this visit
+  std::string failure;               ///< empty when the visit went well
+  Seconds t_start{0.0}, t_end{0.0};
+};
+
+class Mission {
+ public:
+  Mission(hal::Robot& robot, MissionComponents components, MissionOptions options, std::uint64_t seed);
+  ~Mission();
+
+  /// The robot's pose at the start (the site frame is the workpiece's: given, not measured).
+  void Start(const Pose2& T_site_base, const Vector6d& q);
+
+  /// Run the whole plan. Returns one log per visit; stops early (safely) on a failure.
+  std::vector<VisitLog> Run(const BuildingPlan& plan);
+
+  /// Progress text (position k of n, the phase) for a terminal.
+  std::function<void(const std::string&)> on_progress;
+
+  /// The model of what is built so far (bricks at their designed poses).
+  const Site& workpiece() const { return workpiece_; }
+  bool stopped() const { return stopped_; }
+  const std::string& stop_reason() const { return stop_reason_; }
+
+ private:
+  bool Reposition(const BuildingPosition& goal, VisitLog& log);
+  bool Localize(VisitLog& log);
+  bool PlaceBrick(int k, VisitLog& log);
+  void StopSafely(const std::string& why);
+  void Progress(const std::string& text);
+  /// Drain the robot's sensor queues: clocks, gyro and base scans into the estimator.
+  void PumpSensors();
+  bool RunArm(const arm::PrimitiveResult& steps, const std::string& what);
+  base::PlanningScene Scene() const;
+  Pose3 Pose3Of(const Pose2& p) const;
+
+  hal::Robot& robot_;
+  MissionComponents c_;
+  MissionOptions o_;
+  RandomStream rng_;
+  std::unique_ptr<base::BaseStateEstimator> estimator_;
+  std::unique_ptr<arm::ArmPrimitives> arm_;
+  DeviceClockSync sync_base_laser_, sync_arm_laser_, sync_gyro_, sync_arm_;
+  Seconds last_scan_mid_{0.0};  ///< mid time of the last base scan given to the estimator
+  Seconds last_gyro_{-1e300}, last_base_scan_{-1e300}, last_arm_scan_{-1e300}, last_joint_state_{-1e300};
+  std::vector<LaserScan> arm_scans_;
+  std::vector<JointState> joint_states_;
+  Site workpiece_;        ///< the site plus the bricks built so far (designed poses)
+  Pose2 T_site_base_;     ///< the current best pose (estimator or localization)
+  Vector6d q_;            ///< last commanded arm configuration
+  int bricks_placed_{0};
+  bool stopped_{false};
+  std::string stop_reason_;
+  std::vector<Stamped<Pose2>>* trace_{nullptr};  // where PumpSensors logs estimates
+};
+
+}  // namespace ifab::sequencer

@@ -1,0 +1,179 @@
+#include "ifab/sync/clock_sync.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "ifab/core/config.h"
+#include "ifab/core/random.h"
+
+namespace ifab {
+namespace {
+
+// A device clock: host time = offset + rate * device + 0.5 * drift * device^2 (a crystal whose
+// rate drifts slowly).
+struct SyntheticClock {
+  double offset{12.345};
+  double rate{1.0 + 50e-6};
+  double drift{0.0};  // [1/s]
+  double Host(double device) const { return offset + rate * device + 0.5 * drift * device * device; }
+};
+
+// Positive delays of the host's pulse time stamps: a floor, exponential jitter and a share of
+// pulses that arrive very late (a busy acquisition system).
+double Delay(RandomStream& rng, double late_share = 0.05) {
+  double d = 50e-6 - 500e-6 * std::log(1.0 - rng.Uniform());
+  if (rng.Bernoulli(late_share)) d += rng.Uniform(5e-3, 50e-3);
+  return d;
+}
+
+TEST(ClockSync, RecoversOffsetAndSkewDespiteLateObservations) {
+  const SyntheticClock clock;
+  for (std::uint64_t seed = 0; seed < 20; ++seed) {
+    RandomStream rng(seed);
+    ClockSync sync;
+    // Pulses at 40 Hz for 30 s of device time.
+    for (int k = 0; k < 1200; ++k) {
+      const double device = 100.0 + k * 0.025;
+      sync.AddPair(device, clock.Host(device) + Delay(rng));
+    }
+    const ClockMapping m = *sync.Mapping();
+    EXPECT_NEAR(m.Skew(), 50e-6, 5e-6) << "seed " << seed;
+    // The one-way estimate maps to the earliest possible arrival: within the delay floor plus a
+    // little of the jitter of the least delayed pulses.
+    for (double device : {100.0, 115.0, 130.0}) {
+      const double err = *sync.ToHost(device) - clock.Host(device);
+      EXPECT_GT(err, 0.0) << "seed " << seed;
+      EXPECT_LT(err, 50e-6 + 40e-6) << "seed " << seed;
+    }
+  }
+}
+
+TEST(ClockSync, BeatsLeastSquaresByTheMeanDelay) {
+  const SyntheticClock clock;
+  RandomStream rng(7);
+  ClockSync sync;
+  std::vector<std::pair<double, double>> pairs;
+  for (int k = 0; k < 400; ++k) {
+    const double device = k * 0.025;
+    pairs.emplace_back(device, clock.Host(device) + Delay(rng, 0.1));
+    sync.AddPair(pairs.back().first, pairs.back().second);
+  }
+  // Ordinary least squares line through the same pairs (what one gets ignoring the delay sign).
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (auto [x, y] : pairs) { sx += x; sy += y; sxx += x * x; sxy += x * y; }
+  const double n = static_cast<double>(pairs.size());
+  const double b = (n * sxy - sx * sy) / (n * sxx - sx * sx);
+  const double a = (sy - b * sx) / n;
+  const double device = 5.0;
+  const double err_ls = std::abs(a + b * device - clock.Host(device));
+  const double err_hull = std::abs(*sync.ToHost(device) - clock.Host(device));
+  EXPECT_GT(err_ls, 1e-3);
+  EXPECT_LT(err_hull, 1e-4);
+}
+
+TEST(ClockSync, TracksADriftingSkewOverItsWindow) {
+  SyntheticClock clock;
+  clock.drift = 2e-8;  // the rate changes by 2e-8 per second: 36 ppm over 30 min
+  RandomStream rng(3);
+  ClockSyncOptions options;
+  options.window = 30.0;
+  ClockSync sync(options);
+  double worst = 0.0;
+  for (int k = 0; k < 40 * 1800; ++k) {
+    const double device = k * 0.025;
+    sync.AddPair(device, clock.Host(device) + Delay(rng));
+    if (k % 400 == 399) worst = std::max(worst, std::abs(*sync.ToHost(device) - clock.Host(device)));
+  }
+  // Curvature over a 30 s window: drift W^2 / 8 ~ 2 us, plus the delay floor.
+  EXPECT_LT(worst, 150e-6);
+}
+
+TEST(ClockSync, RejectsMismatchedPulsesAndRestartsAfterAClockJump) {
+  const SyntheticClock clock;
+  RandomStream rng(11);
+  ClockSync sync;
+  for (int k = 0; k < 400; ++k) {
+    const double device = k * 0.025;
+    double host = clock.Host(device) + Delay(rng);
+    if (k % 50 == 25) host -= 0.025;  // pulse matched with the next packet: 25 ms early
+    sync.AddPair(device, host);
+  }
+  EXPECT_GE(sync.rejected(), 6);
+  EXPECT_LT(std::abs(*sync.ToHost(5.0) - clock.Host(5.0)), 1e-4);
+
+  // The device restarts its clock: device times jump back by 9 s. Pairs look far too early,
+  // and after a run of rejections the estimator starts over on the new clock.
+  SyntheticClock restarted = clock;
+  restarted.offset += 9.0;
+  for (int k = 0; k < 400; ++k) {
+    const double device = 1.0 + k * 0.025;
+    sync.AddPair(device, restarted.Host(device) + Delay(rng, 0.0));
+  }
+  EXPECT_EQ(sync.restarts(), 1);
+  EXPECT_LT(std::abs(*sync.ToHost(10.0) - restarted.Host(10.0)), 1e-4);
+}
+
+TEST(ClockSync, KeepsPrecisionWithEpochTimes) {
+  SyntheticClock clock;
+  clock.offset = 1.7e9;
+  RandomStream rng(5);
+  ClockSyncOptions options;
+  options.latency = 50e-6;  // the known delay floor
+  ClockSync sync(options);
+  for (int k = 0; k < 800; ++k) {
+    const double device = 3.0e5 + k * 0.025;
+    sync.AddPair(device, clock.Host(device) + Delay(rng));
+  }
+  EXPECT_NEAR(*sync.ToHost(3.0e5 + 10.0), clock.Host(3.0e5 + 10.0), 40e-6);
+}
+
+TEST(ClockSync, OnePairGivesOffsetOnly) {
+  ClockSync sync;
+  EXPECT_FALSE(sync.Mapping().has_value());
+  sync.AddPair(10.0, 110.0);
+  EXPECT_NEAR(*sync.ToHost(12.0), 112.0, 1e-12);
+  EXPECT_NEAR(sync.Mapping()->Skew(), 0.0, 1e-15);
+}
+
+TEST(DeviceClockSync, MatchesPacketsAndPulsesBySequenceInAnyOrder) {
+  const SyntheticClock clock;
+  RandomStream rng(2);
+  DeviceClockSync device_sync;
+  std::vector<Stamp> stamps;
+  for (std::uint64_t k = 0; k < 200; ++k) {
+    Stamp s;
+    s.sequence = k;
+    s.t_device = k * 0.025;
+    s.t_host_received = clock.Host(s.t_device) + 0.01;
+    stamps.push_back(s);
+  }
+  for (std::uint64_t k = 0; k < 200; ++k) {
+    const SyncPulse pulse{DeviceId::kArmLaser, k, clock.Host(stamps[k].t_device) + Delay(rng, 0.0)};
+    if (k % 2 == 0) {  // pulse first, then packet
+      device_sync.AddPulse(pulse);
+      device_sync.AddPacket(stamps[k]);
+    } else if (k % 7 != 0) {  // some pulses are lost
+      device_sync.AddPacket(stamps[k]);
+      device_sync.AddPulse(pulse);
+    } else {
+      device_sync.AddPacket(stamps[k]);
+    }
+  }
+  EXPECT_GT(device_sync.clock().size(), 150u);
+  Stamp s = stamps[120];
+  ASSERT_TRUE(device_sync.Apply(s));
+  EXPECT_NEAR(s.t, clock.Host(s.t_device), 1e-4);
+}
+
+TEST(ClockSyncOptions, ReadsAndValidatesConfig) {
+  const auto o = ClockSyncOptions::FromConfig(ConfigNode::FromString("{window: 10, latency: 0.0001}"));
+  EXPECT_EQ(o.window, 10.0);
+  EXPECT_EQ(o.latency, 0.0001);
+  EXPECT_THROW(ClockSyncOptions::FromConfig(ConfigNode::FromString("{window: -1}")), InputError);
+  EXPECT_THROW(ClockSyncOptions::FromConfig(ConfigNode::FromString("{windw: 1}")), InputError);
+}
+
+}  // namespace
+}  // namespace ifab
