@@ -43,6 +43,7 @@ class RecordingRobot final : public hal::Robot {
   void SendJointTrajectory(const JointTrajectory& t) override { sim_.SendJointTrajectory(t); }
   bool ArmBusy() const override { return sim_.ArmBusy(); }
   void SetGripper(bool grip) override { sim_.SetGripper(grip); }
+  void SetLaserActive(DeviceId id, bool active) override { sim_.SetLaserActive(id, active); }
   std::vector<LaserScan> TakeLaserScans(DeviceId id) override { return sim_.TakeLaserScans(id); }
   std::vector<GyroSample> TakeGyroSamples() override { return sim_.TakeGyroSamples(); }
   std::vector<JointState> TakeJointStates() override { return sim_.TakeJointStates(); }

@@ -32,6 +32,9 @@ class Robot {
   virtual void SetGripper(bool grip) = 0;
 
   // Sensors.
+  /// Switch a laser scanner's emission on or off (the UTM-30LX's BM/QT commands); an idle laser
+  /// sends no scans. Lasers start on. A driver that cannot switch them may ignore this.
+  virtual void SetLaserActive(DeviceId /*laser*/, bool /*active*/) {}
   virtual std::vector<LaserScan> TakeLaserScans(DeviceId laser) = 0;
   virtual std::vector<GyroSample> TakeGyroSamples() = 0;
   virtual std::vector<JointState> TakeJointStates() = 0;

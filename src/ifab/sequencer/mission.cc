@@ -22,7 +22,7 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
   c.ExpectKeys({"control_period", "drive_timeout_factor", "drive_timeout_margin", "settle_time", "plan_attempts",
                 "max_sweeps", "min_inliers", "max_localization_std_m", "max_localization_std_deg",
                 "max_localization_jump_m", "scan_distance", "scan_elevation_deg", "sweep_half_angle_deg",
-                "sweep_speed_deg_s", "park_joints_deg"});
+                "sweep_speed_deg_s", "crop_radius", "park_joints_deg"});
   MissionOptions o;
   c.ReadPositive("control_period", o.control_period);
   c.ReadPositive("drive_timeout_factor", o.drive_timeout_factor);
@@ -38,6 +38,7 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
   c.ReadInRange("scan_elevation_deg", o.scan_elevation_deg, 0.0, 90.0);
   c.ReadPositive("sweep_half_angle_deg", o.sweep_half_angle_deg);
   c.ReadPositive("sweep_speed_deg_s", o.sweep_speed_deg_s);
+  c.ReadPositive("crop_radius", o.crop_radius);
   if (auto q = c.Find("park_joints_deg")) {
     const auto v = q->AsNumbers(6);
     for (int i = 0; i < 6; ++i) o.q_park[i] = DegToRad(v[static_cast<std::size_t>(i)]);
@@ -74,9 +75,11 @@ Pose3 Mission::Pose3Of(const Pose2& p) const {
 
 void Mission::Start(const Pose2& T_site_base, const Vector6d& q) {
   T_site_base_ = T_site_base;
+  estimating_ = false;  // standing at the start; estimation begins with the first drive
   q_ = q;
   last_scan_mid_ = robot_.Now();
   estimator_->Reset(T_site_base, last_scan_mid_);
+  robot_.SetLaserActive(DeviceId::kArmLaser, false);
 }
 
 void Mission::PumpSensors() {
@@ -89,24 +92,38 @@ void Mission::PumpSensors() {
       case DeviceId::kArm: sync_arm_.AddPulse(p); break;
     }
   }
-  // A packet is used once its device's clock is synced, and only if it is newer than the last
-  // one used (before the first pulse pair there is no trustworthy time for it).
-  auto synced = [](DeviceClockSync& sync, Stamp& stamp, Seconds& last) {
-    sync.AddPacket(stamp);
+  // Every packet's stamp enters its device's sync first (one refit per device and pump, not one
+  // per packet), then the packets are mapped to host time. A packet is used once its device's
+  // clock is synced, and only if it is newer than the last one used.
+  std::vector<GyroSample> gyro_in = robot_.TakeGyroSamples();
+  std::vector<LaserScan> base_in = robot_.TakeLaserScans(DeviceId::kBaseLaser);
+  std::vector<LaserScan> arm_in = robot_.TakeLaserScans(DeviceId::kArmLaser);
+  std::vector<JointState> joints_in = robot_.TakeJointStates();
+  for (const auto& g : gyro_in) sync_gyro_.AddPacket(g.stamp);
+  for (const auto& s : base_in) sync_base_laser_.AddPacket(s.stamp);
+  for (const auto& s : arm_in) sync_arm_laser_.AddPacket(s.stamp);
+  for (const auto& j : joints_in) sync_arm_.AddPacket(j.stamp);
+  auto synced = [](const DeviceClockSync& sync, Stamp& stamp, Seconds& last) {
     if (!sync.Apply(stamp) || stamp.t <= last) return false;
     last = stamp.t;
     return true;
   };
   std::vector<GyroSample> gyro;
-  for (auto& g : robot_.TakeGyroSamples())
+  for (auto& g : gyro_in)
     if (synced(sync_gyro_, g.stamp, last_gyro_)) gyro.push_back(g);
   std::vector<LaserScan> scans;
-  for (auto& s : robot_.TakeLaserScans(DeviceId::kBaseLaser))
+  for (auto& s : base_in)
     if (synced(sync_base_laser_, s.stamp, last_base_scan_)) scans.push_back(std::move(s));
-  for (auto& s : robot_.TakeLaserScans(DeviceId::kArmLaser))
+  for (auto& s : arm_in)
     if (synced(sync_arm_laser_, s.stamp, last_arm_scan_)) arm_scans_.push_back(std::move(s));
-  for (auto& j : robot_.TakeJointStates())
+  for (auto& j : joints_in)
     if (synced(sync_arm_, j.stamp, last_joint_state_)) joint_states_.push_back(j);
+  // While the base stands still for arm work nothing moves it: the estimator rests, and is reset
+  // to the current pose before the next drive.
+  if (!estimating_) {
+    if (!scans.empty()) last_scan_mid_ = scans.back().MidTime();
+    return;
+  }
   // Gyro samples up to each scan go in before it (the estimator integrates between scans).
   std::size_t gi = 0;
   for (const auto& scan : scans) {
@@ -182,6 +199,8 @@ bool Mission::Reposition(const BuildingPosition& goal, VisitLog& log) {
 
   Progress(fmt::format("{}: driving ({:.1f} m planned)", goal.name, log.plan.trajectory.Length()));
   base::BaseTrajectoryController controller(c_.controller);
+  estimator_->Reset(T_site_base_, last_scan_mid_, /*keep_references=*/true);
+  estimating_ = true;
   controller.SetTrajectory(log.plan.trajectory);
   const Seconds deadline =
       robot_.Now() + o_.drive_timeout_factor * log.plan.trajectory.duration + o_.drive_timeout_margin;
@@ -208,6 +227,7 @@ bool Mission::Reposition(const BuildingPosition& goal, VisitLog& log) {
     PumpSensors();
   }
   trace_ = nullptr;
+  estimating_ = false;
   log.end_estimate = T_site_base_;
   if (!arrived) spdlog::warn("{}: the controller did not reach the goal tolerance in time", goal.name);
   return true;
@@ -271,10 +291,19 @@ bool Mission::Localize(VisitLog& log) {
     PumpSensors();
     arm_scans_.clear();
     joint_states_.clear();
-    if (!RunArm(sweep_steps, "scan sweep")) return false;
+    robot_.SetLaserActive(DeviceId::kArmLaser, true);  // the arm laser works only for sweeps
+    const bool sweep_ok = RunArm(sweep_steps, "scan sweep");
+    robot_.SetLaserActive(DeviceId::kArmLaser, false);
+    if (!sweep_ok) return false;
     ++log.sweeps;
 
-    log.cloud = AssembleCloud(arm_scans_, joint_states_, c_.robot, c_.T_tool0_arm_laser, c_.assembly);
+    // Eq. 6, then keep what lies near the workpiece (and the floor around it).
+    const std::vector<RayPoint> swept =
+        AssembleCloud(arm_scans_, joint_states_, c_.robot, c_.T_tool0_arm_laser, c_.assembly);
+    const Eigen::Vector3d p_stack_base = T_site_base.inverse(Eigen::Isometry) * p_top;
+    log.cloud.clear();
+    for (const RayPoint& p : swept)
+      if ((p.p - p_stack_base).head<2>().norm() < o_.crop_radius) log.cloud.push_back(p);
     Site model = workpiece_;  // register against the workpiece (the stack as built) and the ground
     model.walls.clear();
     model.obstacles.clear();

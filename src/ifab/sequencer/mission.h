@@ -46,6 +46,7 @@ struct MissionOptions {
   double scan_elevation_deg{50.0};   ///< view direction's angle below horizontal
   double sweep_half_angle_deg{12.0}; ///< the sweep turns joint 1 this far each side
   double sweep_speed_deg_s{8.0};
+  double crop_radius{0.6};           ///< [m] registration keeps points this close (horizontally) to the workpiece
   Vector6d q_park{Vector6d::Zero()}; ///< arm configuration while driving [rad]
   Pose3 T_base_feeder{Pose3::Identity()};  ///< where the on-board feeder presents a brick
 
@@ -136,6 +137,7 @@ class Mission {
   bool stopped_{false};
   std::string stop_reason_;
   std::vector<Stamped<Pose2>>* trace_{nullptr};  // where PumpSensors logs estimates
+  bool estimating_{true};  // false while the base stands still for arm work: scans are not matched
 };
 
 }  // namespace ifab::sequencer

@@ -188,8 +188,16 @@ void SimRobot::Step() {
     next += lrf.options().scan_period;
     start = end;
   };
-  scan_due(base_lrf_, next_base_scan_, base_scan_start_, false, base_laser_clock_, base_lrf_rng_, base_scans_);
-  scan_due(arm_lrf_, next_arm_scan_, arm_scan_start_, true, arm_laser_clock_, arm_lrf_rng_, arm_scans_);
+  // An idle laser keeps its mirror turning (the schedule advances) but casts nothing.
+  auto idle = [&](const LrfModel& lrf, Seconds& next, Snapshot& start) {
+    const double sweep = lrf.options().scan_period * lrf.options().sweep_fraction;
+    while (t_ + 1e-9 >= next + sweep) next += lrf.options().scan_period;
+    start = {t_, base_.pose(), servo_.q_physical()};
+  };
+  if (base_laser_active_) scan_due(base_lrf_, next_base_scan_, base_scan_start_, false, base_laser_clock_, base_lrf_rng_, base_scans_);
+  else idle(base_lrf_, next_base_scan_, base_scan_start_);
+  if (arm_laser_active_) scan_due(arm_lrf_, next_arm_scan_, arm_scan_start_, true, arm_laser_clock_, arm_lrf_rng_, arm_scans_);
+  else idle(arm_lrf_, next_arm_scan_, arm_scan_start_);
 }
 
 void SimRobot::CommandTracks(const TrackCommand& command) { base_.Command(command.v_left, command.v_right); }
@@ -223,6 +231,11 @@ void SimRobot::SetGripper(bool grip) {
     ++bricks_released_;
     PresentFeederBrick();
   }
+}
+
+void SimRobot::SetLaserActive(DeviceId laser, bool active) {
+  if (laser == DeviceId::kBaseLaser) base_laser_active_ = active;
+  if (laser == DeviceId::kArmLaser) arm_laser_active_ = active;
 }
 
 std::vector<LaserScan> SimRobot::TakeLaserScans(DeviceId laser) {

@@ -52,6 +52,7 @@ class SimRobot final : public hal::Robot {
   void SendJointTrajectory(const JointTrajectory& trajectory) override;
   bool ArmBusy() const override;
   void SetGripper(bool grip) override;
+  void SetLaserActive(DeviceId laser, bool active) override;
   std::vector<LaserScan> TakeLaserScans(DeviceId laser) override;
   std::vector<GyroSample> TakeGyroSamples() override;
   std::vector<JointState> TakeJointStates() override;
@@ -111,6 +112,7 @@ class SimRobot final : public hal::Robot {
   std::vector<JointState> joint_states_;
   std::vector<SyncPulse> pulses_;
 
+  bool base_laser_active_{true}, arm_laser_active_{true};
   std::optional<Pose3> held_;  ///< T_gripper_brick of the held brick
   SiteBox feeder_brick_;  ///< its pose is T_base_brick: the feeder rides on the base
   int bricks_released_{0};
