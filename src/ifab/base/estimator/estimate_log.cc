@@ -102,7 +102,8 @@ RelationErrors EvaluateRelations(const std::vector<Seconds>& stamps, const std::
   return out;
 }
 
-std::vector<Seconds> RepairStamps(const std::vector<Seconds>& stamps, int* repaired) {
+std::vector<Seconds> RepairStamps(const std::vector<Seconds>& stamps, int* interpolated,
+                                  int* nudged) {
   const std::size_t n = stamps.size();
   std::vector<Seconds> t(stamps);
   // A stamp is trustworthy if no later stamp is earlier (backward running minimum).
@@ -112,7 +113,7 @@ std::vector<Seconds> RepairStamps(const std::vector<Seconds>& stamps, int* repai
     if (stamps[k] > running_min) good[k] = 0;
     running_min = std::min(running_min, stamps[k]);
   }
-  int changed = 0;
+  int changed = 0, moved = 0;
   std::size_t prev_good = n;  // none yet
   for (std::size_t k = 0; k < n; ++k) {
     if (good[k]) {
@@ -134,10 +135,11 @@ std::vector<Seconds> RepairStamps(const std::vector<Seconds>& stamps, int* repai
   for (std::size_t k = 1; k < n; ++k) {
     if (t[k] < t[k - 1] + kMinStep) {
       t[k] = t[k - 1] + kMinStep;
-      if (good[k]) ++changed;
+      if (good[k]) ++moved;
     }
   }
-  if (repaired) *repaired = changed;
+  if (interpolated) *interpolated = changed;
+  if (nudged) *nudged = moved;
   return t;
 }
 
@@ -225,8 +227,8 @@ nlohmann::json RunEstimateOnLog(const std::string& log_path, const std::string& 
     stamps.push_back(s.scan.stamp.t);
     max_beams = std::max(max_beams, s.scan.size());
   }
-  int repaired = 0;
-  const std::vector<Seconds> clock = RepairStamps(stamps, &repaired);
+  int interpolated = 0, nudged = 0;
+  const std::vector<Seconds> clock = RepairStamps(stamps, &interpolated, &nudged);
 
   EstimatorOptions est_options = options.estimator;
   est_options.max_beams = std::max(est_options.max_beams, static_cast<int>(max_beams));
@@ -292,7 +294,8 @@ nlohmann::json RunEstimateOnLog(const std::string& log_path, const std::string& 
   metrics["rotation_input"] =
       "wheel odometry heading change between consecutive scans (CARMEN logs have no gyro), fed "
       "to eq. 2 as one rate sample per scan";
-  metrics["timestamps_repaired"] = repaired;
+  metrics["timestamps_late_interpolated"] = interpolated;
+  metrics["timestamps_moved_to_1ms_steps"] = nudged;
   metrics["odometry_stalls_repaired"] = stalls;
   metrics["initial_guess"] = options.odometry_translation_hint
                                  ? "previous pose composed with the odometry step (not in the cost)"

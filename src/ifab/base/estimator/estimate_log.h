@@ -15,8 +15,11 @@
 /// late by up to ~0.9 s while the odometry shows the file order is the true order). Scans are
 /// processed in file order on a repaired, increasing clock: a stamp later than any following
 /// stamp is replaced by interpolation between its nearest trustworthy neighbours (by index),
-/// and consecutive scans are kept at least 1 ms apart. The original stamps are kept for the
-/// relations (which refer to them) and are written to the trajectory beside the repaired ones.
+/// and consecutive scans are kept at least 1 ms apart (intel.clf: 999 stamps interpolated,
+/// 1470 moved by less than 1 ms). The original stamps are kept for the relations (which refer
+/// to them) and are written to the trajectory beside the repaired ones. The repaired clock only
+/// drives the horizon, the gyro interval and the constant-velocity prior; the rotation input is
+/// the odometry's heading change per scan, whatever the stamps.
 
 #include <nlohmann/json.hpp>
 #include <limits>
@@ -71,9 +74,10 @@ RelationErrors EvaluateRelations(const std::vector<Seconds>& stamps, const std::
                                  double max_span = std::numeric_limits<double>::infinity(),
                                  double tolerance = 1e-3);
 
-/// The repaired processing clock for a log's stamps (see the file comment); also reports how
-/// many stamps were changed.
-std::vector<Seconds> RepairStamps(const std::vector<Seconds>& stamps, int* repaired = nullptr);
+/// The repaired processing clock for a log's stamps (see the file comment); reports how many
+/// late stamps were interpolated and how many were moved forward to keep 1 ms steps.
+std::vector<Seconds> RepairStamps(const std::vector<Seconds>& stamps, int* interpolated = nullptr,
+                                  int* nudged = nullptr);
 
 /// Odometry with stalls repaired: where the position (or the heading) repeats exactly over a
 /// run of scans and then jumps by more than stall_jump_m (stall_jump_rad), the run is replaced
