@@ -67,20 +67,27 @@ struct Stats {
   double Mean() const { return n ? sum / n : 0.0; }
 };
 
-nlohmann::json Run(const RunContext& ctx) {
-  const auto wall_start = std::chrono::steady_clock::now();
-  const ConfigNode& c = *ctx.config;
+// What the brick-stack and base-maneuvers experiments share: the simulated machine, the stack's
+// components and options, read from one experiment YAML.
+struct Setup {
+  sim::SimOptions sim_options;
+  sequencer::MissionComponents parts;
+  sequencer::MissionOptions mission_options;
+  sequencer::BuildingPlan plan;
+  Vector6d q0;
+};
+
+Setup LoadSetup(const ConfigNode& c) {
   c.ExpectKeys({"seed", "robot", "site", "arm", "estimator", "planner", "controller", "base", "perception",
                 "plan", "mission", "start_joints_deg", "write_clouds"});
-
+  Setup s;
   // The simulated machine (truth) and what the stack knows of it (design values, configs).
   const ConfigNode robot_yaml = ConfigNode::LoadFile(Beside(c, "robot"));
-  sim::SimOptions sim_options = sim::SimOptions::FromConfig(robot_yaml["sim"]);
-  sim_options.site = Beside(c, "site");
-
-  sequencer::MissionComponents parts;
-  parts.robot = LoadRobotModel(sim_options.urdf);
-  parts.site = LoadSite(sim_options.site);
+  s.sim_options = sim::SimOptions::FromConfig(robot_yaml["sim"]);
+  s.sim_options.site = Beside(c, "site");
+  sequencer::MissionComponents& parts = s.parts;
+  parts.robot = LoadRobotModel(s.sim_options.urdf);
+  parts.site = LoadSite(s.sim_options.site);
   parts.base_geometry = base::BaseGeometry::Load(Beside(c, "base"));
   parts.planner = base::StompPlannerOptions::FromConfig(ConfigNode::LoadFile(Beside(c, "planner"))["base_planner"]);
   parts.estimator = base::EstimatorOptions::FromConfig(ConfigNode::LoadFile(Beside(c, "estimator"))["estimator"]);
@@ -92,19 +99,31 @@ nlohmann::json Run(const RunContext& ctx) {
   const ConfigNode perception = ConfigNode::LoadFile(Beside(c, "perception"));
   if (auto a = perception.Find("assembly")) parts.assembly = ScanAssemblyOptions::FromConfig(*a);
   if (auto r = perception.Find("registration")) parts.registration = RegistrationOptions::FromConfig(*r);
-  if (auto s = perception.Find("clock_sync")) parts.clock_sync = ClockSyncOptions::FromConfig(*s);
+  if (auto sy = perception.Find("clock_sync")) parts.clock_sync = ClockSyncOptions::FromConfig(*sy);
   parts.T_tool0_arm_laser = parts.robot.T_tool0_arm_laser;  // the design mount (calibration: see README)
-  sequencer::MissionOptions mission_options = sequencer::MissionOptions::FromConfig(c["mission"]);
+  s.mission_options = sequencer::MissionOptions::FromConfig(c["mission"]);
   {
     const auto v = robot_yaml["feeder_in_base"].AsNumbers(6);
-    mission_options.T_base_feeder = PoseFromXyzRpy(v[0], v[1], v[2], v[3], v[4], v[5]);
+    s.mission_options.T_base_feeder = PoseFromXyzRpy(v[0], v[1], v[2], v[3], v[4], v[5]);
   }
-  const sequencer::BuildingPlan plan = sequencer::BuildingPlan::FromConfig(c["plan"]);
-  Vector6d q0 = mission_options.q_park;
+  s.plan = sequencer::BuildingPlan::FromConfig(c["plan"]);
+  s.q0 = s.mission_options.q_park;
   if (auto q = c.Find("start_joints_deg")) {
     const auto v = q->AsNumbers(6);
-    for (int i = 0; i < 6; ++i) q0[i] = DegToRad(v[static_cast<std::size_t>(i)]);
+    for (int i = 0; i < 6; ++i) s.q0[i] = DegToRad(v[static_cast<std::size_t>(i)]);
   }
+  return s;
+}
+
+nlohmann::json Run(const RunContext& ctx) {
+  const auto wall_start = std::chrono::steady_clock::now();
+  const ConfigNode& c = *ctx.config;
+  const Setup setup = LoadSetup(c);
+  const sim::SimOptions& sim_options = setup.sim_options;
+  const sequencer::MissionComponents& parts = setup.parts;
+  const sequencer::MissionOptions& mission_options = setup.mission_options;
+  const sequencer::BuildingPlan& plan = setup.plan;
+  const Vector6d q0 = setup.q0;
 
   // The robot starts at the first building position; the site frame is the workpiece's, so the
   // start pose is known (the first brick defines where the stack is).
@@ -218,7 +237,78 @@ std::vector<std::vector<std::string>> Table(const nlohmann::json& r) {
   };
 }
 
+// `ifab run base-maneuvers` (issue 4): the base drives between the building positions with the
+// planner, the controller and the estimator alone (no localization, no bricks). Per maneuver the
+// estimator's drift is the error of its relative motion from start to end against the true one
+// (Kuemmerle et al.'s relation metric), so no truth ever enters the mission.
+nlohmann::json RunManeuvers(const RunContext& ctx) {
+  const auto wall_start = std::chrono::steady_clock::now();
+  Setup setup = LoadSetup(*ctx.config);
+  setup.mission_options.localize = false;
+  setup.mission_options.place_bricks = false;
+  const Pose2 start = setup.plan.positions[static_cast<std::size_t>(setup.plan.visits.front().position)].T_site_base;
+  sim::SimRobot sim(setup.sim_options, start, setup.q0, ctx.seed);
+  RecordingRobot robot(sim);
+  sequencer::Mission mission(robot, setup.parts, setup.mission_options, ctx.seed);
+  mission.on_progress = [&](const std::string& text) { ctx.Progress(text); };
+  Pose2 true_start = sim.true_base_pose();
+  std::vector<std::pair<Pose2, Pose2>> truth;  // true start and end of each visit
+  mission.on_visit_end = [&](sequencer::VisitLog&) {
+    truth.emplace_back(true_start, sim.true_base_pose());
+    true_start = sim.true_base_pose();
+  };
+  mission.Start(start, setup.q0);
+  const auto logs = mission.Run(setup.plan);
+
+  Stats end_m, end_deg, drift_m, drift_deg;
+  std::ofstream csv(std::filesystem::path(ctx.out_dir) / "maneuvers.csv");
+  csv << "visit,position,end_error_m,end_error_deg,drift_m,drift_deg\n";
+  for (std::size_t k = 0; k < logs.size(); ++k) {
+    const auto& log = logs[k];
+    if (log.visit == 0 || log.plan.trajectory.empty()) continue;
+    const Pose2 est_rel = log.start_estimate.inverse() * log.end_estimate;
+    const Pose2 true_rel = truth[k].first.inverse() * truth[k].second;
+    const Pose2 e = est_rel.inverse() * true_rel;
+    const double em = TranslationDistance(log.end_estimate, log.desired);
+    const double ed = RadToDeg(AngleDistance(log.end_estimate, log.desired));
+    const double dm = std::hypot(e.x, e.y), dd = RadToDeg(std::abs(e.theta));
+    end_m.Add(em);
+    end_deg.Add(ed);
+    drift_m.Add(dm);
+    drift_deg.Add(dd);
+    csv << fmt::format("{},{},{:.4f},{:.3f},{:.4f},{:.3f}\n", log.visit, log.position, em, ed, dm, dd);
+  }
+  nlohmann::json r;
+  r["maneuvers"] = end_m.n;
+  r["end_error_vs_desired_m_mean"] = end_m.Mean();
+  r["end_error_vs_desired_deg_mean"] = end_deg.Mean();
+  r["drift_m_mean"] = drift_m.Mean();
+  r["drift_deg_mean"] = drift_deg.Mean();
+  r["drift_m_max"] = drift_m.max;
+  r["drift_deg_max"] = drift_deg.max;
+  r["sim_seconds"] = sim.Now();
+  r["wall_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  r["failed"] = mission.stopped();
+  return r;
+}
+
+std::vector<std::vector<std::string>> ManeuversTable(const nlohmann::json& r) {
+  auto f = [&](const char* key, double scale, int digits) {
+    return fmt::format("{:.{}f}", scale * r[key].get<double>(), digits);
+  };
+  return {{"maneuvers", std::to_string(r["maneuvers"].get<int>()), ""},
+          {"end vs desired [cm]", f("end_error_vs_desired_m_mean", 100, 1), "3"},
+          {"end vs desired [deg]", f("end_error_vs_desired_deg_mean", 1, 2), "1.8"},
+          {"estimator drift [cm]", f("drift_m_mean", 100, 2), "5 (bar: 2.5)"},
+          {"estimator drift [deg]", f("drift_deg_mean", 1, 2), "3.5 (bar: 1.75)"}};
+}
+
 }  // namespace
+
+ExperimentInfo BaseManeuversExperiment() {
+  return {"base-maneuvers", "issue 4: 20+ maneuvers with planner, controller and estimator; drift vs truth",
+          RunManeuvers, ManeuversTable};
+}
 
 ExperimentInfo BrickStackExperiment() {
   return {"brick-stack", "paper Sec. VI-VII: 26 bricks, 25 repositionings around a stack (the default)", Run, Table};

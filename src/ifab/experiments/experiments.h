@@ -5,6 +5,7 @@
 
 namespace ifab::experiments {
 
+ExperimentInfo BaseManeuversExperiment();  ///< issue 4: maneuvers on the estimator alone
 ExperimentInfo BrickStackExperiment();  ///< paper Sec. VI-VII: the brick stack (the default)
 ExperimentInfo LrfBiasExperiment();  ///< paper Fig. 7: stationary floor scans from 3 heights
 ExperimentInfo ArmPlanningExperiment();  ///< paper Sec. IV: iLQG on seeded brick and scan motions

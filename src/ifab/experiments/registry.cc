@@ -7,6 +7,7 @@ namespace ifab::experiments {
 const std::vector<ExperimentInfo>& Registry() {
   static const std::vector<ExperimentInfo> registry = {
       BrickStackExperiment(),
+      BaseManeuversExperiment(),
       LrfBiasExperiment(),
       ArmPlanningExperiment(),
       BasePlanningExperiment(),

@@ -22,7 +22,7 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
   c.ExpectKeys({"control_period", "drive_timeout_factor", "drive_timeout_margin", "settle_time", "plan_attempts",
                 "max_sweeps", "min_inliers", "max_localization_std_m", "max_localization_std_deg",
                 "max_localization_jump_m", "scan_distance", "scan_elevation_deg", "sweep_half_angle_deg",
-                "sweep_speed_deg_s", "crop_radius", "park_joints_deg"});
+                "sweep_speed_deg_s", "crop_radius", "park_joints_deg", "localize", "place_bricks"});
   MissionOptions o;
   c.ReadPositive("control_period", o.control_period);
   c.ReadPositive("drive_timeout_factor", o.drive_timeout_factor);
@@ -39,6 +39,8 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
   c.ReadPositive("sweep_half_angle_deg", o.sweep_half_angle_deg);
   c.ReadPositive("sweep_speed_deg_s", o.sweep_speed_deg_s);
   c.ReadPositive("crop_radius", o.crop_radius);
+  c.Read("localize", o.localize);
+  c.Read("place_bricks", o.place_bricks);
   if (auto q = c.Find("park_joints_deg")) {
     const auto v = q->AsNumbers(6);
     for (int i = 0; i < 6; ++i) o.q_park[i] = DegToRad(v[static_cast<std::size_t>(i)]);
@@ -380,20 +382,23 @@ std::vector<VisitLog> Mission::Run(const BuildingPlan& plan) {
     if (v > 0) {
       if (!Reposition(position, log)) {
         log.t_end = robot_.Now();
+        if (on_visit_end) on_visit_end(log);
         logs.push_back(std::move(log));
         if (stopped_) break;
         continue;  // skip this position (reason logged)
       }
-      if (!Localize(log)) {
+      if (o_.localize && !Localize(log)) {
         log.t_end = robot_.Now();
+        if (on_visit_end) on_visit_end(log);
         logs.push_back(std::move(log));
         break;
       }
     } else {
       log.desired = log.start_estimate = log.end_estimate = T_site_base_;
     }
-    for (int b = 0; b < visit.bricks && !stopped_; ++b) PlaceBrick(brick++, log);
+    for (int b = 0; o_.place_bricks && b < visit.bricks && !stopped_; ++b) PlaceBrick(brick++, log);
     log.t_end = robot_.Now();
+    if (on_visit_end) on_visit_end(log);
     logs.push_back(std::move(log));
   }
   if (!stopped_ && (q_ - o_.q_park).cwiseAbs().maxCoeff() > 1e-3) RunArm(arm_->MoveToJoints(q_, o_.q_park), "park the arm");

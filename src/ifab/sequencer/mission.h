@@ -46,7 +46,9 @@ struct MissionOptions {
   double scan_elevation_deg{50.0};   ///< view direction's angle below horizontal
   double sweep_half_angle_deg{12.0}; ///< the sweep turns joint 1 this far each side
   double sweep_speed_deg_s{8.0};
-  double crop_radius{0.6};           ///< [m] registration keeps points this close (horizontally) to the workpiece
+  double crop_radius{0.6};
+  bool localize{true};               ///< localize against the workpiece after each maneuver
+  bool place_bricks{true};           ///< pick and place the visit's bricks           ///< [m] registration keeps points this close (horizontally) to the workpiece
   Vector6d q_park{Vector6d::Zero()}; ///< arm configuration while driving [rad]
   Pose3 T_base_feeder{Pose3::Identity()};  ///< where the on-board feeder presents a brick
 
@@ -101,6 +103,8 @@ class Mission {
 
   /// Progress text (position k of n, the phase) for a terminal.
   std::function<void(const std::string&)> on_progress;
+  /// Called at the end of every visit, before its log is stored (experiments sample truth here).
+  std::function<void(VisitLog&)> on_visit_end;
 
   /// The model of what is built so far (bricks at their designed poses).
   const Site& workpiece() const { return workpiece_; }
