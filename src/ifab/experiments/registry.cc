@@ -8,6 +8,8 @@ const std::vector<ExperimentInfo>& Registry() {
   static const std::vector<ExperimentInfo> registry = {
       LrfBiasExperiment(),
       ArmPlanningExperiment(),
+      RegistrationConsistencyExperiment(),
+      CalibrationConsistencyExperiment(),
   };
   return registry;
 }

@@ -58,7 +58,7 @@ struct RegistrationOptions {
                                        ///< 0 = keep all (the paper)
   double max_incidence{M_PI / 2};      ///< [rad] kRay: points whose ray meets the face
                                        ///< more obliquely get zero error (range unreliable)
-  RobustLoss loss{RobustLoss::kNone};  ///< robust re-weighting (improvement; the paper: none)
+  RobustLoss loss{RobustLoss::kCauchy};  ///< robust re-weighting (improvement; the paper: none)
   double loss_scale{3.0};              ///< [whitened units] where the robust loss bends
   double step_sigma_translation{0.01}; ///< [m] damping of each correspondence step (a prior on the
                                        ///< step, re-centred every step: it slows directions the
