@@ -148,19 +148,6 @@ class SweepRecorder {
       if (laser_sync_.Apply(s.stamp)) scans.push_back(s);
     rec.scans = std::move(scans);
     for (auto& j : rec.joint_states) arm_sync_.Apply(j.stamp);
-    if (std::getenv("IFAB_DEBUG_SYNC") && !rec.scans.empty() && !rec.joint_states.empty())
-      std::fprintf(stderr, "%s: scans %zu [%.4f..%.4f] (received %.4f) joints %zu [%.4f..%.4f] (received %.4f) now %.4f\n",
-                   name.c_str(), rec.scans.size(), rec.scans.front().stamp.t, rec.scans.back().stamp.t,
-                   rec.scans.front().stamp.t_host_received, rec.joint_states.size(), rec.joint_states.front().stamp.t,
-                   rec.joint_states.back().stamp.t, rec.joint_states.front().stamp.t_host_received, sim_.Now());
-    if (std::getenv("IFAB_DEBUG_SYNC") && !rec.scans.empty() && !rec.joint_states.empty()) {
-      const auto& lc = sim_.options().arm_laser_clock;
-      const auto& ac = sim_.options().arm_clock;
-      const double lt = (rec.scans.front().stamp.t_device - lc.offset) / (1 + 1e-6 * lc.skew_ppm);
-      const double at = (rec.joint_states.front().stamp.t_device - ac.offset) / (1 + 1e-6 * ac.skew_ppm);
-      std::fprintf(stderr, "  sync error: laser %.1f us, arm %.1f us\n", 1e6 * (rec.scans.front().stamp.t - lt),
-                   1e6 * (rec.joint_states.front().stamp.t - at));
-    }
     q_ = plan.q_end;
     return rec;
   }
@@ -252,7 +239,8 @@ json Rpy(const std::array<double, 6>& v) { return {{"roll", v[3]}, {"pitch", v[4
 std::vector<CalibrationSweep> RecordCalibrationSet(const Setup& setup, const std::vector<SweepSpec>& sweeps,
                                                    const Eigen::Vector3d& cube_in_base, double cube_size,
                                                    const Pose3& T_base_cube_true, std::uint64_t seed,
-                                                   const RunContext& ctx, const std::string& label) {
+                                                   const RunContext& ctx, const std::string& label,
+                                                   const std::string& save_dir = "", const std::string& file_prefix = "") {
   // The cube stands at the site origin; the robot is placed around it.
   const Pose3 T_site_cube = PoseFromXyzRpy(0.0, 0.0, 0.5 * cube_size, 0.0, 0.0, 0.0);
   const Pose3 T_site_base3 = T_site_cube * T_base_cube_true.inverse();
@@ -268,8 +256,8 @@ std::vector<CalibrationSweep> RecordCalibrationSet(const Setup& setup, const std
     const std::string name = fmt::format("{} sweep {} (joint {})", label, k + 1, sweeps[k].joint + 1);
     ctx.Progress(name);
     const SweepRecording rec = recorder.Record(cube_in_base.head<2>(), setup.posture, sweeps[k], k % 2 == 1, name);
-    if (const char* dir = std::getenv("IFAB_DUMP_SWEEPS"))
-      SaveSweep((fs::path(dir) / fmt::format("{}_sweep_{}.json", label == "calibration" ? "cal" : label.substr(9), k + 1)).string(), rec);
+    if (!save_dir.empty())
+      SaveSweep((fs::path(save_dir) / fmt::format("{}_sweep_{}.json", file_prefix, k + 1)).string(), rec);
     out.push_back({name, AssembleSweep(rec.scans, rec.joint_states, setup.robot, assembly).points});
   }
   return out;
@@ -281,7 +269,8 @@ json RunRegistrationConsistency(const RunContext& ctx) {
   const ConfigNode& c = *ctx.config;
   c.ExpectKeys({"seed", "robot_yaml", "arm", "range_bias", "scan_posture_deg", "beam_stride", "brick_in_base",
                 "brick_placement_sigma", "guess_error", "sweeps", "passes", "mount", "calibration", "bodies",
-                "registration"});
+                "registration", "save_sweeps"});
+  const bool save_sweeps = c.Get<bool>("save_sweeps", false);
   const Setup setup = ReadSetup(c);
   const std::vector<SweepSpec> sweeps = ReadSweeps(c["sweeps"]);
   int passes = 2;
@@ -309,7 +298,8 @@ json RunRegistrationConsistency(const RunContext& ctx) {
     if (auto o = k.Find("calibration")) copt = CalibrationOptions::FromConfig(*o);
     const Pose3 T_base_cube = PoseFromXyzRpy(cb[0], cb[1], 0.5 * size, 0, 0, DegToRad(cb[2]));
     const auto sets = RecordCalibrationSet(setup, ReadSweeps(k["sweeps"]), Eigen::Vector3d(cb[0], cb[1], cb[2]), size,
-                                           T_base_cube, ctx.seed, ctx, "calibration");
+                                           T_base_cube, ctx.seed, ctx, "calibration",
+                                           save_sweeps ? ctx.out_dir : "", "calibration");
     ctx.Progress("calibrating the arm laser mount");
     const CalibrationSummary cs =
         CalibrateLaserMount(sets, CubeOnGroundBodies(size, T_base_cube), setup.robot.T_tool0_arm_laser, copt);
@@ -353,8 +343,7 @@ json RunRegistrationConsistency(const RunContext& ctx) {
       const std::string name = fmt::format("scan {} (joint {}, pass {})", poses.size() + 1, sweeps[k].joint + 1, pass + 1);
       ctx.Progress(name);
       const SweepRecording rec = recorder.Record(Eigen::Vector2d(bb[0], bb[1]), setup.posture, sweeps[k], pass % 2 == 1, name);
-      if (const char* dir = std::getenv("IFAB_DUMP_SWEEPS"))
-        SaveSweep((fs::path(dir) / fmt::format("reg_scan_{}.json", scans.size() + 1)).string(), rec);
+      if (save_sweeps) SaveSweep((fs::path(ctx.out_dir) / fmt::format("scan_{}_sweep.json", scans.size() + 1)).string(), rec);
       const std::vector<RayPoint> cloud = AssembleCloud(rec.scans, rec.joint_states, setup.robot, T_tool0_laser, assembly);
       // The expected brick pose: its design spot, the robot's localization off by guess_error.
       const Pose3 guess = T_base_brick_design * PoseFromXyzRpy(rng.Uniform(-guess_error[0], guess_error[0]),
@@ -377,7 +366,6 @@ json RunRegistrationConsistency(const RunContext& ctx) {
                        {"status", ToString(s.status)}, {"pose_mm_deg", pose}, {"warnings", s.warnings}});
       csv << fmt::format("{},{},{},{},{:.6f},{:.6f},{:.6f},{:.4f},{:.4f},{:.4f},{}\n", poses.size(), sweeps[k].joint + 1,
                          s.num_points, found->inliers, v[0], v[1], v[2], pose[3], pose[4], pose[5], ToString(s.status));
-      if (std::getenv("IFAB_DUMP_SCANS")) WritePly((fs::path(ctx.out_dir) / fmt::format("scan_{}.ply", scans.size())).string(), ToPointCloud(cloud));
       if (k == 0 && pass == 0) {  // one labelled cloud for the report (paper Fig. 3)
         PointCloud pc = ToPointCloud(cloud);
         std::vector<double> label(cloud.size());
@@ -430,7 +418,9 @@ std::vector<std::vector<std::string>> RegistrationTable(const json& r) {
 json RunCalibrationConsistency(const RunContext& ctx) {
   const ConfigNode& c = *ctx.config;
   c.ExpectKeys({"seed", "robot_yaml", "arm", "range_bias", "scan_posture_deg", "beam_stride", "cube_size",
-                "cube_placement_sigma", "datasets", "sweeps", "trials", "initial_guess", "calibration", "jobs"});
+                "cube_placement_sigma", "datasets", "sweeps", "trials", "initial_guess", "calibration", "jobs",
+                "save_sweeps"});
+  const bool save_sweeps = c.Get<bool>("save_sweeps", false);
   const Setup setup = ReadSetup(c);
   const std::vector<SweepSpec> sweeps = ReadSweeps(c["sweeps"]);
   const double size = c.Get<double>("cube_size", 0.25);
@@ -461,7 +451,8 @@ json RunCalibrationConsistency(const RunContext& ctx) {
                                             DegToRad(rng.Normal(place_sigma[1])));
     const std::string label = fmt::format("data set {}", d + 1);
     const auto recorded = RecordCalibrationSet(setup, sweeps, Eigen::Vector3d(cb[0], cb[1], cb[2]), size,
-                                               T_base_cube_true, ctx.seed + 100 * (d + 1), ctx, label);
+                                               T_base_cube_true, ctx.seed + 100 * (d + 1), ctx, label,
+                                               save_sweeps ? ctx.out_dir : "", fmt::format("dataset_{}", d + 1));
     // 20 trials from random guesses of the mount, the cube and the ground (+-0.02 m, +-3 deg).
     std::vector<std::array<double, 6>> initial(static_cast<std::size_t>(trials));
     std::vector<Pose3> guesses_mount, guesses_cube;

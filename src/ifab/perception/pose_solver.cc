@@ -3,6 +3,7 @@
 #include <ceres/ceres.h>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <spdlog/spdlog.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -12,8 +13,6 @@
 #include <cmath>
 #include <limits>
 #include <memory>
-#include <cstdio>
-#include <cstdlib>
 
 #include "ifab/core/error.h"
 #include "ifab/perception/residuals.h"
@@ -295,14 +294,6 @@ class Engine {
   }
 
   void Match() {
-    const auto t0 = std::chrono::steady_clock::now();
-    struct Report {
-      std::chrono::steady_clock::time_point t0;
-      ~Report() {
-        if (std::getenv("IFAB_DEBUG_SOLVER"))
-          std::fprintf(stderr, "match %.4f s\n", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-      }
-    } report{t0};
     scene_.SetPoses(poses_);
     inverse_poses_.clear();
     for (const auto& T : poses_) inverse_poses_.push_back(T.inverse());
@@ -531,14 +522,10 @@ class Engine {
     so.gradient_tolerance = 1e-14;
     so.parameter_tolerance = 1e-10;
     so.num_threads = options_.num_threads;
-    if (std::getenv("TR")) so.initial_trust_region_radius = std::atof(std::getenv("TR"));
-    if (std::getenv("NOJS")) so.jacobi_scaling = false;
-    if (std::getenv("CHECKGRAD")) so.check_gradients = true;
-    so.logging_type = std::getenv("IFAB_DEBUG_SOLVER") ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
-    so.minimizer_progress_to_stdout = std::getenv("IFAB_DEBUG_SOLVER") && std::getenv("IFAB_DEBUG_SOLVER")[0] == '3';
+    so.logging_type = ceres::SILENT;
     ceres::Solver::Summary summary;
     ceres::Solve(so, b.problem.get(), &summary);
-    if (std::getenv("IFAB_DEBUG_SOLVER")) std::fprintf(stderr, "%s\n", (std::getenv("IFAB_DEBUG_SOLVER")[0] == '2' ? summary.FullReport() : summary.BriefReport()).c_str());
+    spdlog::debug("registration step: {}", summary.BriefReport());
     if (!summary.IsSolutionUsable()) {
       r.ok = false;
       r.message = "Ceres: " + summary.message;
@@ -573,8 +560,7 @@ class Engine {
       r.max_rotation = std::max(r.max_rotation, RotationAngle(next, pose));
       pose = next;
     }
-    if (std::getenv("IFAB_DEBUG_SOLVER"))
-      std::fprintf(stderr, "step %.3g m %.3g rad relaxation %g\n", r.max_translation, r.max_rotation, relaxation_);
+    spdlog::debug("registration step: moved {:.3g} m, {:.3g} rad, relaxation {}", r.max_translation, r.max_rotation, relaxation_);
     return r;
   }
 

@@ -65,6 +65,11 @@ struct RegistrationOptions {
                                        ///< data barely fix, where wrong matches would throw the
                                        ///< pose around, without biasing the result)
   double step_sigma_rotation{0.02};    ///< [rad]
+  int restarts{0};                     ///< rounds of restarts from the result moved +-restart_distance
+                                       ///< along each finite body's 3 weakest directions and its
+                                       ///< x and y (lowest cost kept; 0 = off, the paper). Each
+                                       ///< round costs 10 more solves per finite free body.
+  double restart_distance{0.006};      ///< [m] (rotations: at the body's extent)
   double prior_sigma_translation{1.0}; ///< [m] regularises the covariance of unconstrained directions
   double prior_sigma_rotation{1.0};    ///< [rad]
   double unconstrained_std{0.01};      ///< [m] a direction whose std (rotations times the body's
