@@ -60,7 +60,6 @@ void BM_RegisterStackSweep(benchmark::State& state) {
     summary = Register(s.cloud, guess, options);
     benchmark::DoNotOptimize(summary.cost);
   }
-  if (std::getenv("VERBOSE")) std::fprintf(stderr, "%s\n", summary.BriefReport().c_str());
   const Pose3& est = summary.bodies[1].T_base_body;
   const Pose3& truth = s.truth[1].T_base_body;
   state.counters["points"] = static_cast<double>(s.cloud.size());

@@ -10,5 +10,7 @@ ExperimentInfo BrickStackExperiment();  ///< paper Sec. VI-VII: the brick stack 
 ExperimentInfo LrfBiasExperiment();  ///< paper Fig. 7: stationary floor scans from 3 heights
 ExperimentInfo ArmPlanningExperiment();  ///< paper Sec. IV: iLQG on seeded brick and scan motions
 ExperimentInfo BasePlanningExperiment();  ///< paper Sec. III-A: STOMP on seeded start/goal poses
+ExperimentInfo RegistrationConsistencyExperiment();  ///< paper Table I (perception_experiments.cc)
+ExperimentInfo CalibrationConsistencyExperiment();   ///< paper Table II (perception_experiments.cc)
 
 }  // namespace ifab::experiments

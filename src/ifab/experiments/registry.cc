@@ -11,6 +11,8 @@ const std::vector<ExperimentInfo>& Registry() {
       LrfBiasExperiment(),
       ArmPlanningExperiment(),
       BasePlanningExperiment(),
+      RegistrationConsistencyExperiment(),
+      CalibrationConsistencyExperiment(),
   };
   return registry;
 }

@@ -3,6 +3,7 @@
 #include <ceres/ceres.h>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <spdlog/spdlog.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -12,8 +13,6 @@
 #include <cmath>
 #include <limits>
 #include <memory>
-#include <cstdio>
-#include <cstdlib>
 
 #include "ifab/core/error.h"
 #include "ifab/perception/residuals.h"
@@ -295,14 +294,6 @@ class Engine {
   }
 
   void Match() {
-    const auto t0 = std::chrono::steady_clock::now();
-    struct Report {
-      std::chrono::steady_clock::time_point t0;
-      ~Report() {
-        if (std::getenv("IFAB_DEBUG_SOLVER"))
-          std::fprintf(stderr, "match %.4f s\n", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-      }
-    } report{t0};
     scene_.SetPoses(poses_);
     inverse_poses_.clear();
     for (const auto& T : poses_) inverse_poses_.push_back(T.inverse());
@@ -339,62 +330,82 @@ class Engine {
                                            options_.shadow_edge_distance);
     double whitened = 0.0;
     if (options_.residual == RegistrationResidual::kRay) {
-      // The face the ray hits first. A point whose range is far from that face's is not explained
-      // by the model along its ray (unmodelled object) and gets zero error; so does a shadow
-      // point (flagged, and its range more than shadow_distance off) and a ray that meets its
-      // face nearly edge-on. A ray that hits nothing is matched to the tangent plane at its
-      // closest point.
+      // The face the ray hits first explains the point by its range (kRange). Near an edge
+      // (flagged) a point far off that face either came from the surface on the other side of
+      // the edge (then it is matched to the closest surface: these points carry the silhouette,
+      // the only horizontal information of a brick seen from above) or is a mixed pixel between
+      // the two (a shadow point: zero error). A ray that hits nothing is matched to the tangent
+      // plane at its closest point; points too far from their surface get zero error.
+      struct Candidate {
+        int primitive{-1};
+        Eigen::Vector3d x, n;
+        bool range{false};
+        double signed_distance{0.0}, error{0.0}, sigma{1.0};
+      };
+      auto closest_candidate = [&] {
+        Candidate k;
+        k.primitive = near.primitive;
+        k.x = near.point;
+        k.n = near.feature == Feature::kFace || !(near.distance > 1e-9) ? near.normal
+                                                                        : Eigen::Vector3d((rp.p - near.point) / near.distance);
+        k.signed_distance = k.n.dot(rp.p - k.x);
+        k.error = std::abs(k.signed_distance);
+        k.sigma = std::sqrt(options_.noise.NormalVariance(u, range, k.n));
+        return k;
+      };
       const double reach = options_.max_distance > 0.0 ? options_.max_distance : 1.0;
       const auto hit = scene_.CastRay(rp.origin, u, range + reach);
-      const int primitive = hit ? hit->primitive : near.primitive;
-      const Eigen::Vector3d x = hit ? Eigen::Vector3d(rp.origin + hit->t * u) : near.point;
-      Eigen::Vector3d n = hit ? hit->normal : Eigen::Vector3d((rp.p - near.point) / near.distance);
-      if (!hit && !(near.distance > 1e-12)) n = -u;
-      const double signed_distance = n.dot(rp.p - x);
-      const double c = std::abs(n.dot(u));
-      // The error the sensor makes is along the ray: gate on the range error (at a grazing face
-      // a beam that slipped past it is metres long but only millimetres off the face's plane).
-      const double range_error = hit ? std::abs(signed_distance) / std::max(c, 1e-3) : std::abs(signed_distance);
-      // A point in front of its face (range short) may be an unmodelled occluder: zero error if
-      // far. One far behind it saw through where the model has a solid: evidence that the pose
-      // is wrong, kept with a bounded weight (below) unless it is a shadow point.
-      const bool behind = signed_distance < 0.0;
-      double gate_weight = 1.0;
-      if (options_.max_distance > 0.0 && range_error > options_.max_distance) {
-        if (!behind || !hit) {
-          matches_[i] = m;
-          return;
+      Candidate chosen;
+      if (hit) {
+        chosen.primitive = hit->primitive;
+        chosen.x = rp.origin + hit->t * u;
+        chosen.n = hit->normal;
+        chosen.range = true;
+        chosen.signed_distance = chosen.n.dot(rp.p - chosen.x);
+        // The sensor errs along the ray: compare the range error (at a grazing face a beam that
+        // slipped past it is metres long but only millimetres off the face's plane).
+        const double c = std::max(std::abs(chosen.n.dot(u)), 1e-3);
+        chosen.error = std::abs(chosen.signed_distance) / c;
+        chosen.sigma = std::sqrt(options_.noise.NormalVariance(u, range, chosen.n)) / c;
+        const bool off = chosen.error > options_.shadow_distance && chosen.error > options_.shadow_sigmas * chosen.sigma;
+        if (flagged_[i] && off) {
+          const Candidate other = closest_candidate();
+          if (other.primitive == chosen.primitive ||
+              (other.error > options_.shadow_distance && other.error > options_.shadow_sigmas * other.sigma)) {
+            labels_[i] = PointLabel::kShadow;
+            matches_[i] = m;
+            return;
+          }
+          chosen = other;
         }
-        gate_weight = options_.max_distance / range_error;
+      } else {
+        chosen = closest_candidate();
       }
-      const double normal_sigma = std::sqrt(options_.noise.NormalVariance(u, range, n));
-      const double range_sigma = hit ? normal_sigma / std::max(c, 1e-3) : normal_sigma;
-      if (flagged_[i] && range_error > options_.shadow_distance &&
-          range_error > options_.shadow_sigmas * range_sigma) {
-        labels_[i] = PointLabel::kShadow;
+      if (options_.max_distance > 0.0 && chosen.error > options_.max_distance) {
         matches_[i] = m;
         return;
       }
-      if (hit && c < std::cos(options_.max_incidence)) {
+      const double c = std::abs(chosen.n.dot(u));
+      if (chosen.range && c < std::cos(options_.max_incidence)) {
         labels_[i] = PointLabel::kGrazing;
         matches_[i] = m;
         return;
       }
-      const ScenePrimitive& sp = scene_.primitives()[static_cast<std::size_t>(primitive)];
+      const ScenePrimitive& sp = scene_.primitives()[static_cast<std::size_t>(chosen.primitive)];
       const Pose3& T_body_base = inverse_poses_[static_cast<std::size_t>(sp.body)];
       m.body = sp.body;
-      m.primitive = primitive;
-      m.normal_body = T_body_base.linear() * n;
-      m.offset_body = m.normal_body.dot(T_body_base * x);
-      if (hit) {
+      m.primitive = chosen.primitive;
+      m.normal_body = T_body_base.linear() * chosen.n;
+      m.offset_body = m.normal_body.dot(T_body_base * chosen.x);
+      const double normal_sigma = std::sqrt(options_.noise.NormalVariance(u, range, chosen.n));
+      if (chosen.range) {
         m.kind = PointMatch::Kind::kRange;
         m.inv_sigma = c / normal_sigma;
       } else {
         m.kind = PointMatch::Kind::kPlane;
         m.inv_sigma = 1.0 / normal_sigma;
       }
-      whitened = signed_distance / normal_sigma;
-      m.inv_sigma *= std::sqrt(gate_weight);
+      whitened = chosen.signed_distance / normal_sigma;
     } else {
       // Eq. 7 and the paper's shadow rule: flagged and far from the closest primitive: zero error.
       if (flagged_[i] && near.distance > options_.shadow_distance) {
@@ -511,14 +522,10 @@ class Engine {
     so.gradient_tolerance = 1e-14;
     so.parameter_tolerance = 1e-10;
     so.num_threads = options_.num_threads;
-    if (std::getenv("TR")) so.initial_trust_region_radius = std::atof(std::getenv("TR"));
-    if (std::getenv("NOJS")) so.jacobi_scaling = false;
-    if (std::getenv("CHECKGRAD")) so.check_gradients = true;
-    so.logging_type = std::getenv("IFAB_DEBUG_SOLVER") ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
-    so.minimizer_progress_to_stdout = std::getenv("IFAB_DEBUG_SOLVER") && std::getenv("IFAB_DEBUG_SOLVER")[0] == '3';
+    so.logging_type = ceres::SILENT;
     ceres::Solver::Summary summary;
     ceres::Solve(so, b.problem.get(), &summary);
-    if (std::getenv("IFAB_DEBUG_SOLVER")) std::fprintf(stderr, "%s\n", (std::getenv("IFAB_DEBUG_SOLVER")[0] == '2' ? summary.FullReport() : summary.BriefReport()).c_str());
+    spdlog::debug("registration step: {}", summary.BriefReport());
     if (!summary.IsSolutionUsable()) {
       r.ok = false;
       r.message = "Ceres: " + summary.message;
@@ -553,8 +560,7 @@ class Engine {
       r.max_rotation = std::max(r.max_rotation, RotationAngle(next, pose));
       pose = next;
     }
-    if (std::getenv("IFAB_DEBUG_SOLVER"))
-      std::fprintf(stderr, "step %.3g m %.3g rad relaxation %g\n", r.max_translation, r.max_rotation, relaxation_);
+    spdlog::debug("registration step: moved {:.3g} m, {:.3g} rad, relaxation {}", r.max_translation, r.max_rotation, relaxation_);
     return r;
   }
 

@@ -22,7 +22,7 @@ Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
 RegistrationOptions RegistrationOptions::FromConfig(const ConfigNode& c) {
   c.ExpectKeys({"noise", "residual", "max_iterations", "max_solver_iterations", "translation_tolerance",
                 "rotation_tolerance", "shadow_points", "shadow_edge_distance", "shadow_distance", "shadow_sigmas", "max_distance", "max_incidence_deg",
-                "loss", "loss_scale", "step_sigma_translation", "step_sigma_rotation", "prior_sigma_translation", "prior_sigma_rotation", "unconstrained_std",
+                "loss", "loss_scale", "step_sigma_translation", "step_sigma_rotation", "restarts", "restart_distance", "prior_sigma_translation", "prior_sigma_rotation", "unconstrained_std",
                 "num_threads"});
   RegistrationOptions o;
   if (auto n = c.Find("noise")) o.noise = LaserNoiseModel::FromConfig(*n);
@@ -56,6 +56,8 @@ RegistrationOptions RegistrationOptions::FromConfig(const ConfigNode& c) {
   c.ReadPositive("loss_scale", o.loss_scale);
   c.ReadPositive("step_sigma_translation", o.step_sigma_translation);
   c.ReadPositive("step_sigma_rotation", o.step_sigma_rotation);
+  c.ReadNonNegative("restarts", o.restarts);
+  c.ReadPositive("restart_distance", o.restart_distance);
   c.ReadPositive("prior_sigma_translation", o.prior_sigma_translation);
   c.ReadPositive("prior_sigma_rotation", o.prior_sigma_rotation);
   c.ReadPositive("unconstrained_std", o.unconstrained_std);
@@ -101,7 +103,56 @@ RegistrationSummary Register(const std::vector<RayPoint>& cloud, const std::vect
                              const RegistrationOptions& options) {
   internal::PoseProblemInput input;
   input.cloud = &cloud;
-  return internal::SolvePoseProblem(input, bodies, options).summary;
+  RegistrationSummary best = internal::SolvePoseProblem(input, bodies, options).summary;
+  // Restarts: points near silhouettes switch sides and the alternation can settle in a nearby
+  // local minimum along a weakly constrained direction. Start again from the result moved both
+  // ways along each body's weakest directions; keep the lowest cost.
+  int restarts = 0;
+  for (int round = 0; round < options.restarts && best.IsUsable(); ++round) {
+    bool improved = false;
+    const RegistrationSummary current = best;
+    for (std::size_t b = 0; b < bodies.size(); ++b) {
+      if (!bodies[b].free) continue;
+      double extent = 0.0;
+      for (const auto& part : bodies[b].parts)
+        for (const auto& g : part.primitives)
+          if (auto box = Bounds(g, part.T_site_object)) extent = std::max(extent, 0.5 * (box->hi - box->lo).norm());
+      if (extent <= 0.0) continue;  // planes only: nothing to hop over
+      // Weakest directions of the body's covariance, rotations scaled by its extent.
+      Eigen::Matrix<double, 6, 1> d;
+      d << 1, 1, 1, extent, extent, extent;
+      const Matrix6d scaled = d.asDiagonal() * current.bodies[b].covariance * d.asDiagonal();
+      Eigen::SelfAdjointEigenSolver<Matrix6d> eig(0.5 * (scaled + scaled.transpose()));
+      // The three weakest directions, and the body's own x and y (a brick's long and short
+      // axes, whose silhouettes are what registration leans on).
+      std::vector<Eigen::Matrix<double, 6, 1>> directions;
+      for (int k = 5; k >= 3; --k) directions.push_back(eig.eigenvectors().col(k));
+      for (int axis = 0; axis < 2; ++axis) {
+        Eigen::Matrix<double, 6, 1> v = Eigen::Matrix<double, 6, 1>::Zero();
+        v.head<3>() = current.bodies[b].T_base_body.linear().col(axis);
+        directions.push_back(v);
+      }
+      for (const auto& v : directions) {
+        for (double sign : {-1.0, 1.0}) {
+          std::vector<RegistrationBody> start = bodies;
+          for (std::size_t j = 0; j < bodies.size(); ++j) start[j].T_base_body = current.bodies[j].T_base_body;
+          Pose3& T = start[b].T_base_body;
+          const double s = sign * options.restart_distance;
+          T.linear() = ExpSO3(s * v.tail<3>() / extent) * T.linear();
+          T.translation() += s * v.head<3>();
+          RegistrationSummary trial = internal::SolvePoseProblem(input, start, options).summary;
+          ++restarts;
+          if (trial.IsUsable() && trial.cost < best.cost - 1e-9 * std::abs(best.cost)) {
+            best = std::move(trial);
+            improved = true;
+          }
+        }
+      }
+    }
+    if (!improved) break;
+  }
+  if (restarts > 0) best.message += fmt::format(" (best of {} restarts)", restarts + 1);
+  return best;
 }
 
 std::vector<RegistrationBody> SiteBodies(const Site& site, const Pose3& T_site_base_guess, bool separate_ground) {

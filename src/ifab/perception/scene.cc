@@ -64,6 +64,8 @@ Scene::Nearest Scene::Closest(const Eigen::Vector3d& p_base) const {
       best.primitive = static_cast<int>(i);
       best.distance = cp.distance;
       best.point = sp.T_base_primitive * cp.point;
+      best.normal = sp.T_base_primitive.linear() * cp.normal;
+      best.feature = cp.feature;
     }
   }
   return best;

@@ -50,6 +50,8 @@ class Scene {
     int primitive{-1};
     double distance{0.0};
     Eigen::Vector3d point{Eigen::Vector3d::Zero()};  ///< closest point, base frame
+    Eigen::Vector3d normal{Eigen::Vector3d::UnitZ()};  ///< outward normal of its face, base frame
+    Feature feature{Feature::kFace};
   };
   /// The primitive closest to p (base frame); primitive < 0 if the scene is empty.
   Nearest Closest(const Eigen::Vector3d& p_base) const;

