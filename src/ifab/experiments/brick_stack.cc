@@ -164,7 +164,7 @@ nlohmann::json Run(const RunContext& ctx) {
   planned_csv << "visit,index,x,y,theta,v,omega\n";
   est_csv << "visit,t,x,y,theta\n";
   visits_csv << "visit,position,desired_x,desired_y,desired_theta,end_x,end_y,end_theta,localized,loc_x,loc_y,"
-                "loc_theta,sweeps,failure\n";
+                "loc_theta,sweeps,reapproaches,failure\n";
   int repositionings = 0;
   for (const auto& log : logs) {
     for (std::size_t i = 0; i < log.plan.trajectory.points.size(); ++i) {
@@ -174,11 +174,11 @@ nlohmann::json Run(const RunContext& ctx) {
     }
     for (const auto& s : log.estimated)
       est_csv << fmt::format("{},{:.3f},{:.4f},{:.4f},{:.5f}\n", log.visit, s.t, s.value.x, s.value.y, s.value.theta);
-    visits_csv << fmt::format("{},{},{:.4f},{:.4f},{:.5f},{:.4f},{:.4f},{:.5f},{},{:.4f},{:.4f},{:.5f},{},\"{}\"\n",
+    visits_csv << fmt::format("{},{},{:.4f},{:.4f},{:.5f},{:.4f},{:.4f},{:.5f},{},{:.4f},{:.4f},{:.5f},{},{},\"{}\"\n",
                               log.visit, log.position, log.desired.x, log.desired.y, log.desired.theta,
                               log.end_estimate.x, log.end_estimate.y, log.end_estimate.theta, log.localized,
                               log.localized_pose.x, log.localized_pose.y, log.localized_pose.theta, log.sweeps,
-                              log.failure);
+                              log.reapproaches, log.failure);
     if (log.visit == 0 || log.plan.trajectory.empty()) continue;
     ++repositionings;
     end_m.Add(TranslationDistance(log.end_estimate, log.desired));
@@ -262,7 +262,8 @@ nlohmann::json RunManeuvers(const RunContext& ctx) {
 
   Stats end_m, end_deg, drift_m, drift_deg;
   std::ofstream csv(std::filesystem::path(ctx.out_dir) / "maneuvers.csv");
-  csv << "visit,position,end_error_m,end_error_deg,drift_m,drift_deg\n";
+  csv << "visit,position,end_error_m,end_error_deg,drift_m,drift_deg,reapproaches\n";
+  int reapproaches = 0;
   for (std::size_t k = 0; k < logs.size(); ++k) {
     const auto& log = logs[k];
     if (log.visit == 0 || log.plan.trajectory.empty()) continue;
@@ -276,7 +277,9 @@ nlohmann::json RunManeuvers(const RunContext& ctx) {
     end_deg.Add(ed);
     drift_m.Add(dm);
     drift_deg.Add(dd);
-    csv << fmt::format("{},{},{:.4f},{:.3f},{:.4f},{:.3f}\n", log.visit, log.position, em, ed, dm, dd);
+    reapproaches += log.reapproaches;
+    csv << fmt::format("{},{},{:.4f},{:.3f},{:.4f},{:.3f},{}\n", log.visit, log.position, em, ed, dm, dd,
+                       log.reapproaches);
   }
   nlohmann::json r;
   r["maneuvers"] = end_m.n;
@@ -286,6 +289,9 @@ nlohmann::json RunManeuvers(const RunContext& ctx) {
   r["drift_deg_mean"] = drift_deg.Mean();
   r["drift_m_max"] = drift_m.max;
   r["drift_deg_max"] = drift_deg.max;
+  r["end_error_vs_desired_m_max"] = end_m.max;
+  r["end_error_vs_desired_deg_max"] = end_deg.max;
+  r["reapproaches"] = reapproaches;
   r["sim_seconds"] = sim.Now();
   r["wall_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   r["failed"] = mission.stopped();

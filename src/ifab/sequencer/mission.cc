@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <cmath>
+#include <optional>
 
 #include "ifab/core/angles.h"
 #include "ifab/core/config.h"
@@ -22,7 +23,8 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
   c.ExpectKeys({"control_period", "drive_timeout_factor", "drive_timeout_margin", "settle_time", "plan_attempts",
                 "max_sweeps", "min_inliers", "max_localization_std_m", "max_localization_std_deg",
                 "max_localization_jump_m", "scan_distance", "scan_elevation_deg", "sweep_half_angle_deg",
-                "sweep_speed_deg_s", "crop_radius", "park_joints_deg", "localize", "place_bricks"});
+                "sweep_speed_deg_s", "crop_radius", "park_joints_deg", "localize", "place_bricks", "max_reapproaches",
+                "reapproach_tolerance", "reapproach_distance", "reapproach_speed"});
   MissionOptions o;
   c.ReadPositive("control_period", o.control_period);
   c.ReadPositive("drive_timeout_factor", o.drive_timeout_factor);
@@ -41,6 +43,10 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
   c.ReadPositive("crop_radius", o.crop_radius);
   c.Read("localize", o.localize);
   c.Read("place_bricks", o.place_bricks);
+  c.ReadNonNegative("max_reapproaches", o.max_reapproaches);
+  c.ReadPositive("reapproach_tolerance", o.reapproach_tolerance);
+  c.ReadPositive("reapproach_distance", o.reapproach_distance);
+  c.ReadPositive("reapproach_speed", o.reapproach_speed);
   if (auto q = c.Find("park_joints_deg")) {
     const auto v = q->AsNumbers(6);
     for (int i = 0; i < 6; ++i) o.q_park[i] = DegToRad(v[static_cast<std::size_t>(i)]);
@@ -200,28 +206,40 @@ bool Mission::Reposition(const BuildingPosition& goal, VisitLog& log) {
   }
 
   Progress(fmt::format("{}: driving ({:.1f} m planned)", goal.name, log.plan.trajectory.Length()));
-  base::BaseTrajectoryController controller(c_.controller);
   estimator_->Reset(T_site_base_, last_scan_mid_, /*keep_references=*/true);
   estimating_ = true;
-  controller.SetTrajectory(log.plan.trajectory);
-  const Seconds deadline =
-      robot_.Now() + o_.drive_timeout_factor * log.plan.trajectory.duration + o_.drive_timeout_margin;
   trace_ = &log.estimated;
   bool arrived = false;
-  while (robot_.Now() < deadline) {
-    robot_.Wait(o_.control_period);
-    PumpSensors();
-    const base::BaseControllerOutput u = controller.Update(T_site_base_, robot_.Now());
-    if (u.done) {
-      arrived = true;
+  base::BaseControllerOutput u = Follow(log.plan.trajectory, &arrived);
+  // A tracked base cannot move sideways: an offset the tracking left at the end is driven out by
+  // reversing along the goal's line and coming forward onto it (or forward first, if reversing
+  // would hit something).
+  const base::FootprintChecker footprint(Scene(), c_.base_geometry);
+  spdlog::debug("{}: maneuver ended {} at {:.1f} cm from the goal ({:.1f} cm sideways)", goal.name,
+                arrived ? "in tolerance" : "on time-out", 100.0 * u.end_distance, 100.0 * u.end_lateral_error);
+  while (arrived && u.end_distance > o_.reapproach_tolerance && log.reapproaches < o_.max_reapproaches) {
+    std::optional<std::array<base::BaseTrajectory, 2>> legs;
+    for (bool reverse_first : {true, false}) {
+      auto candidate = base::ReapproachTrajectories(T_site_base_, goal.T_site_base, o_.reapproach_distance,
+                                                    o_.reapproach_speed, reverse_first);
+      bool clear = true;
+      for (const auto& leg : candidate)
+        for (const auto& p : leg.points) clear = clear && footprint.Clearance(p.pose) > 0.0;
+      if (clear) {
+        legs = std::move(candidate);
+        break;
+      }
+    }
+    if (!legs) {
+      spdlog::debug("{}: no collision-free re-approach", goal.name);
       break;
     }
-    TrackCommand command;
-    double v = 0, omega = 0;
-    base::BaseTrajectoryController::ToTrackSpeeds(u.v, u.omega, c_.controller.track_gauge,
-                                                  c_.controller.max_track_speed, &v, &omega, &command);
-    command.t = robot_.Now();
-    robot_.CommandTracks(command);
+    ++log.reapproaches;
+    Progress(fmt::format("{}: re-approaching ({:.1f} cm sideways)", goal.name, 100.0 * u.end_lateral_error));
+    for (const auto& leg : *legs) {
+      u = Follow(leg, &arrived);
+      if (!arrived) break;
+    }
   }
   robot_.CommandTracks({robot_.Now(), 0.0, 0.0});
   for (double t = 0; t < o_.settle_time; t += o_.control_period) {
@@ -233,6 +251,28 @@ bool Mission::Reposition(const BuildingPosition& goal, VisitLog& log) {
   log.end_estimate = T_site_base_;
   if (!arrived) spdlog::warn("{}: the controller did not reach the goal tolerance in time", goal.name);
   return true;
+}
+
+base::BaseControllerOutput Mission::Follow(const base::BaseTrajectory& trajectory, bool* arrived) {
+  base::BaseTrajectoryController controller(c_.controller);
+  controller.SetTrajectory(trajectory);
+  const Seconds deadline = robot_.Now() + o_.drive_timeout_factor * trajectory.duration + o_.drive_timeout_margin;
+  *arrived = false;
+  base::BaseControllerOutput u;
+  while (robot_.Now() < deadline) {
+    robot_.Wait(o_.control_period);
+    PumpSensors();
+    u = controller.Update(T_site_base_, robot_.Now());
+    if (u.done) {
+      *arrived = true;
+      break;
+    }
+    TrackCommand command = u.command;
+    command.t = robot_.Now();
+    robot_.CommandTracks(command);
+  }
+  robot_.CommandTracks({robot_.Now(), 0.0, 0.0});
+  return u;
 }
 
 bool Mission::Localize(VisitLog& log) {

@@ -46,9 +46,15 @@ struct MissionOptions {
   double scan_elevation_deg{50.0};   ///< view direction's angle below horizontal
   double sweep_half_angle_deg{12.0}; ///< the sweep turns joint 1 this far each side
   double sweep_speed_deg_s{8.0};
-  double crop_radius{0.6};
+  double crop_radius{0.6};            ///< [m] registration keeps points this close (horizontally) to the workpiece
   bool localize{true};               ///< localize against the workpiece after each maneuver
-  bool place_bricks{true};           ///< pick and place the visit's bricks           ///< [m] registration keeps points this close (horizontally) to the workpiece
+  bool place_bricks{true};           ///< pick and place the visit's bricks
+  /// Re-approaches (reverse and forward along the goal's line) when the maneuver ends with a
+  /// sideways offset beyond the controller's tolerance; 0: the paper's single maneuver.
+  int max_reapproaches{2};
+  double reapproach_tolerance{0.015};  ///< [m] re-approach when the end is farther than this from the goal
+  double reapproach_distance{0.4};   ///< [m] each leg of a re-approach
+  double reapproach_speed{0.1};      ///< [m/s]
   Vector6d q_park{Vector6d::Zero()}; ///< arm configuration while driving [rad]
   Pose3 T_base_feeder{Pose3::Identity()};  ///< where the on-board feeder presents a brick
 
@@ -82,6 +88,7 @@ struct VisitLog {
   bool localized{false};
   Pose2 localized_pose;              ///< T_site_base from registration
   int sweeps{0};
+  int reapproaches{0};               ///< straight re-approaches after the planned maneuver
   std::string registration_report;
   std::vector<RayPoint> cloud;       ///< the last assembled sweep (base frame)
   Pose3 T_site_base_at_scan{Pose3::Identity()};
@@ -113,6 +120,8 @@ class Mission {
 
  private:
   bool Reposition(const BuildingPosition& goal, VisitLog& log);
+  /// Follow one trajectory with the controller on the estimator's poses until done or timeout.
+  base::BaseControllerOutput Follow(const base::BaseTrajectory& trajectory, bool* arrived);
   bool Localize(VisitLog& log);
   bool PlaceBrick(int k, VisitLog& log);
   void StopSafely(const std::string& why);

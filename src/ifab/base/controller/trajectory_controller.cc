@@ -12,7 +12,7 @@ namespace ifab::base {
 BaseControllerOptions BaseControllerOptions::FromConfig(const ConfigNode& node) {
   BaseControllerOptions o;
   node.ExpectKeys({"p_t", "p_theta", "track_gauge", "max_track_speed", "goal_tolerance_xy", "goal_tolerance_theta",
-                   "heading_scale", "search_ahead", "search_behind", "end_approach_gain", "min_end_speed"});
+                   "heading_scale", "search_ahead", "search_behind", "end_approach_gain", "min_end_speed", "settle_hold"});
   node.ReadNonNegative("p_t", o.p_t);
   node.ReadNonNegative("p_theta", o.p_theta);
   node.ReadPositive("track_gauge", o.track_gauge);
@@ -24,6 +24,7 @@ BaseControllerOptions BaseControllerOptions::FromConfig(const ConfigNode& node) 
   node.ReadNonNegative("search_behind", o.search_behind);
   node.ReadNonNegative("end_approach_gain", o.end_approach_gain);
   node.ReadNonNegative("min_end_speed", o.min_end_speed);
+  node.ReadNonNegative("settle_hold", o.settle_hold);
   return o;
 }
 
@@ -35,6 +36,7 @@ void BaseTrajectoryController::SetTrajectory(BaseTrajectory trajectory) {
   progress_ = 0.0;
   done_ = false;
   at_end_ = false;
+  stop_time_ = -1.0;
 }
 
 bool BaseTrajectoryController::ToTrackSpeeds(double v, double omega, double track_gauge, double max_track_speed,
@@ -108,9 +110,17 @@ BaseControllerOutput BaseTrajectoryController::Update(const Pose2& pose, double 
   out.end_distance = TranslationDistance(pose, end);
   // Once the end has been the closest point, it stays the target (no chattering at its edge).
   at_end_ = at_end_ || segments == 0 || out.closest >= segments - 1e-9;
-  if ((at_end_ || out.closest >= segments - 1) && std::abs(along_end) <= options_.goal_tolerance_xy &&
-      std::abs(e_theta_end) <= options_.goal_tolerance_theta) {
-    done_ = true;
+  const bool within = (at_end_ || out.closest >= segments - 1) && std::abs(along_end) <= options_.goal_tolerance_xy &&
+                      std::abs(e_theta_end) <= options_.goal_tolerance_theta;
+  if (within && !done_) {
+    if (stop_time_ < 0.0) stop_time_ = t;
+    if (t - stop_time_ >= options_.settle_hold) {
+      done_ = true;
+    } else {
+      return out;  // stopped (zero command), watching the pose settle
+    }
+  } else if (!done_) {
+    stop_time_ = -1.0;
   }
   if (done_) {
     out.done = true;
@@ -146,6 +156,26 @@ BaseControllerOutput BaseTrajectoryController::Update(const Pose2& pose, double 
   out.speed_limited =
       ToTrackSpeeds(v, omega, options_.track_gauge, options_.max_track_speed, &out.v, &out.omega, &out.command);
   return out;
+}
+
+std::array<BaseTrajectory, 2> ReapproachTrajectories(const Pose2& from, const Pose2& goal, double distance,
+                                                     double speed, bool reverse_first, double step) {
+  IFAB_THROW_UNLESS(distance > 0.0 && speed > 0.0 && step > 0.0, "re-approach: expected positive lengths");
+  const Eigen::Vector2d dir(std::cos(goal.theta), std::sin(goal.theta));
+  auto at = [&](double s) { return Pose2(goal.x + s * dir.x(), goal.y + s * dir.y(), goal.theta); };
+  // A straight leg along the goal's line from s0 to s1 (s: signed distance ahead of the goal).
+  auto leg = [&](const Pose2& start, double s0, double s1) {
+    const double v = s1 < s0 ? -speed : speed;
+    const int n = std::max(1, static_cast<int>(std::ceil(std::abs(s1 - s0) / step)));
+    BaseTrajectory t;
+    t.points.push_back({start, v, 0.0});
+    for (int k = 1; k <= n; ++k) t.points.push_back({at(s0 + (s1 - s0) * k / n), v, 0.0});
+    t.duration = std::abs(s1 - s0) / speed;
+    return t;
+  };
+  const double s_from = dir.dot(Eigen::Vector2d(from.x - goal.x, from.y - goal.y));
+  const double s_turn = reverse_first ? std::min(s_from, 0.0) - distance : std::max(s_from, 0.0) + distance;
+  return {leg(from, s_from, s_turn), leg(at(s_turn), s_turn, 0.0)};
 }
 
 }  // namespace ifab::base

@@ -21,6 +21,7 @@
 /// sideways offset left at the end by the tracking stays: `done` means reached along the end
 /// heading and in heading; `end_reached` says whether the sideways offset is within tolerance too.
 
+#include <array>
 #include <optional>
 
 #include "ifab/base/planner/base_trajectory.h"
@@ -36,13 +37,17 @@ struct BaseControllerOptions {
   double p_theta{2.0};            ///< gain on the angular displacement e_theta [1/s]
   double track_gauge{1.0};        ///< distance between the track centre lines B [m]
   double max_track_speed{0.3};    ///< track speed limit [m/s]
-  double goal_tolerance_xy{0.03};     ///< done when the end is this close along its heading [m]
+  double goal_tolerance_xy{0.01};     ///< done when the end is this close along its heading [m]
   double goal_tolerance_theta{0.026};  ///< and the end heading this close [rad] (1.5 deg)
   double heading_scale{0.5};      ///< length [m] per radian of heading in the closest-point metric
   int search_ahead{8};            ///< closest point searched this many segments ahead of the last
   int search_behind{2};           ///< and this many behind
   double end_approach_gain{0.5};  ///< P-gain [1/s] on the distance to the end once it is closest (0: eq. 4 only)
   double min_end_speed{0.01};     ///< |v| floor of the end approach [m/s], so the robot arrives
+  /// [s] Within tolerance the controller commands a stop and is done only if the pose stays
+  /// within tolerance this long: a hydraulic base coasts on after a stop command (0.3 s lag at
+  /// 0.3 rad/s is 5 deg), and coasting out of tolerance resumes control. 0: done at once (paper).
+  double settle_hold{0.5};
 
   /// Read a `base_controller` YAML section; fields not named keep their defaults.
   static BaseControllerOptions FromConfig(const ConfigNode& node);
@@ -93,6 +98,16 @@ class BaseTrajectoryController {
   double progress_{0.0};  // segment index + fraction of the last closest point
   bool done_{false};
   bool at_end_{false};  // the end has been the closest point
+  double stop_time_{-1.0};  // when the stop within tolerance was commanded (< 0: not stopping)
 };
+
+/// A straight re-approach onto `goal` along its heading, for a sideways offset the tracking left
+/// at the end (a tracked base cannot move sideways): two legs to follow one after the other,
+/// first in reverse from `from` along the goal's line to `distance` behind the goal, then forward
+/// onto it (or forward first to `distance` ahead, then in reverse: `reverse_first` false); eq. 4
+/// steers the offset out on both. Poses every `step` [m] at nominal speed `speed` [m/s], all with
+/// the goal's heading.
+std::array<BaseTrajectory, 2> ReapproachTrajectories(const Pose2& from, const Pose2& goal, double distance,
+                                                     double speed, bool reverse_first = true, double step = 0.05);
 
 }  // namespace ifab::base

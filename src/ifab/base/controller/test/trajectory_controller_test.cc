@@ -202,8 +202,13 @@ TEST(BaseTrajectoryController, DoneAtTheEndWithinTolerance) {
   c.SetTrajectory(Straight(1.0, 0.2));
   EXPECT_FALSE(c.Update(Pose2(0.0, 0.0, 0.0), 0.0).done);  // at the start
   EXPECT_FALSE(c.Update(Pose2(0.9, 0.0, 0.0), 0.0).done);
-  EXPECT_FALSE(c.Update(Pose2(0.99, 0.0, 0.1), 0.0).done);  // heading off by 5.7 deg
-  const BaseControllerOutput out = c.Update(Pose2(0.99, 0.01, 0.01), 0.0);
+  EXPECT_FALSE(c.Update(Pose2(0.995, 0.0, 0.1), 0.0).done);  // heading off by 5.7 deg
+  // Within tolerance it stops, and is done once the pose has stayed there for the settle hold.
+  const BaseControllerOutput stop = c.Update(Pose2(0.995, 0.01, 0.01), 0.0);
+  EXPECT_FALSE(stop.done);
+  EXPECT_EQ(stop.command.v_left, 0.0);
+  EXPECT_EQ(stop.command.v_right, 0.0);
+  const BaseControllerOutput out = c.Update(Pose2(0.995, 0.01, 0.01), c.options().settle_hold);
   EXPECT_TRUE(out.done);
   EXPECT_EQ(out.command.v_left, 0.0);
   EXPECT_EQ(out.command.v_right, 0.0);
@@ -213,6 +218,33 @@ TEST(BaseTrajectoryController, DoneAtTheEndWithinTolerance) {
   for (int i = 9; i >= 0; --i) loop.points.push_back({Pose2(0.1 * i, 0.0, 0.0), -0.2, 0.0});
   c.SetTrajectory(loop);
   EXPECT_FALSE(c.Update(Pose2(0.0, 0.0, 0.0), 0.0).done);
+}
+
+TEST(BaseTrajectoryController, CoastingOutOfToleranceResumesControl) {
+  BaseTrajectoryController c;
+  c.SetTrajectory(Straight(1.0, 0.2));
+  EXPECT_FALSE(c.Update(Pose2(0.995, 0.0, 0.0), 0.0).done);          // stop commanded
+  const BaseControllerOutput coast = c.Update(Pose2(1.03, 0.0, 0.0), 0.2);  // coasted 3 cm past
+  EXPECT_FALSE(coast.done);
+  EXPECT_LT(coast.v, 0.0);  // comes back
+  EXPECT_FALSE(c.Update(Pose2(1.0, 0.0, 0.0), 0.3).done);  // the hold starts again
+  EXPECT_TRUE(c.Update(Pose2(1.0, 0.0, 0.0), 0.3 + c.options().settle_hold).done);
+}
+
+TEST(BaseTrajectoryController, ReapproachLegsRunAlongTheGoalLineAndEndOnTheGoal) {
+  const Pose2 goal(1.0, 2.0, 0.5);
+  const Pose2 from = goal * Pose2(0.01, 0.03, 0.01);  // 3 cm sideways
+  for (bool reverse_first : {true, false}) {
+    const auto legs = ReapproachTrajectories(from, goal, 0.4, 0.1, reverse_first);
+    const auto& turn = legs[0].points.back().pose;
+    EXPECT_NEAR(std::abs((goal.inverse() * turn).x), 0.4 + (reverse_first ? 0.0 : 0.01), 1e-9);
+    EXPECT_NEAR((goal.inverse() * turn).y, 0.0, 1e-9);
+    EXPECT_EQ(legs[0].points.front().v < 0.0, reverse_first);
+    EXPECT_EQ(legs[1].points.front().v > 0.0, reverse_first);
+    EXPECT_NEAR(TranslationDistance(legs[1].points.back().pose, goal), 0.0, 1e-12);
+    for (const auto& leg : legs)
+      for (const auto& p : leg.points) EXPECT_NEAR(std::abs(WrapAngle(p.pose.theta - goal.theta)), 0.0, 0.011);
+  }
 }
 
 TEST(BaseTrajectoryController, FollowsAStraightLineWithSlipAndLag) {
