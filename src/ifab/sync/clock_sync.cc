@@ -32,10 +32,11 @@ bool ClockSync::AddPair(Seconds t_device, Seconds t_host) {
   // matched to the wrong packet. Only judged once the estimate rests on a long enough span.
   if (pairs_.size() >= 2 &&
       pairs_.back().device - pairs_.front().device >= options_.min_span_to_reject) {
-    if (!gate_ || since_gate_ >= 32) {
+    if (!gate_ || (since_gate_ >= 32 && pairs_.back().device - gate_device_ >= 0.5)) {
       RemoveEarlyOutliers();
       gate_ = Mapping();
       since_gate_ = 0;
+      gate_device_ = pairs_.back().device;
     }
     const double delay = t_host - gate_->ToHost(t_device) - options_.latency;
     if ((options_.max_early > 0.0 && delay < -options_.max_early) ||
@@ -44,15 +45,26 @@ bool ClockSync::AddPair(Seconds t_device, Seconds t_host) {
       if (++consecutive_rejects_ < options_.max_consecutive_rejects) return false;
       // Many in a row: the clock jumped (device reset). Start over from this pair.
       pairs_.clear();
+      hull_valid_ = false;
+      sum_x_ = 0.0;
       gate_.reset();
       ++restarts_;
     }
   }
   consecutive_rejects_ = 0;
   const Pair p{t_device, t_host};
+  if (pairs_.empty()) {
+    origin_ = p;
+    sum_x_ = 0.0;
+    hull_.clear();
+    hull_valid_ = true;
+  }
   auto it = std::upper_bound(pairs_.begin(), pairs_.end(), t_device,
                              [](Seconds d, const Pair& q) { return d < q.device; });
+  if (it != pairs_.end()) hull_valid_ = false;  // out of order: the hull is rebuilt when needed
   pairs_.insert(it, p);
+  sum_x_ += p.device - origin_.device;
+  if (hull_valid_) AppendToHull({p.device - origin_.device, p.host - origin_.host});
   Trim();
   cache_.reset();
   ++since_gate_;
@@ -60,42 +72,53 @@ bool ClockSync::AddPair(Seconds t_device, Seconds t_host) {
 }
 
 void ClockSync::Trim() {
+  // Trim in batches (the oldest pair is always on the hull, so every trim costs a rebuild).
   const Seconds newest = pairs_.back().device;
-  while (pairs_.size() > 1 && (newest - pairs_.front().device > options_.window ||
-                               pairs_.size() > static_cast<std::size_t>(options_.max_pairs)))
+  const auto max_pairs = static_cast<std::size_t>(options_.max_pairs);
+  if (newest - pairs_.front().device <= 1.1 * options_.window && pairs_.size() <= max_pairs + max_pairs / 10) return;
+  while (pairs_.size() > 1 && (newest - pairs_.front().device > options_.window || pairs_.size() > max_pairs)) {
+    sum_x_ -= pairs_.front().device - origin_.device;
     pairs_.pop_front();
+    hull_valid_ = false;
+  }
+}
+
+void ClockSync::AppendToHull(const Point& c) const {
+  // One step of Andrew's monotone chain; among equal device times only the earliest host time
+  // can be on the lower hull.
+  if (!hull_.empty() && c.x == hull_.back().x) {
+    if (c.y >= hull_.back().y) return;
+    hull_.pop_back();
+  }
+  while (hull_.size() >= 2) {
+    const Point& a = hull_[hull_.size() - 2];
+    const Point& b = hull_.back();
+    const double cross = (b.x - a.x) * (c.y - b.y) - (b.y - a.y) * (c.x - b.x);
+    if (cross > 0.0) break;  // strictly convex turn: b stays
+    hull_.pop_back();
+  }
+  hull_.push_back(c);
+}
+
+void ClockSync::RebuildHull() const {
+  origin_ = pairs_.front();  // a new origin at the oldest pair
+  hull_.clear();
+  sum_x_ = 0.0;
+  for (const auto& q : pairs_) {
+    AppendToHull({q.device - origin_.device, q.host - origin_.host});
+    sum_x_ += q.device - origin_.device;
+  }
+  hull_valid_ = true;
 }
 
 ClockMapping ClockSync::Fit() const {
-  // Work relative to the mean device time and the first host time (precision with epoch times).
-  const Seconds device0 = pairs_.front().device;
-  const Seconds host0 = pairs_.front().host;
-  double mean = 0.0;
-  for (const auto& p : pairs_) mean += p.device - device0;
-  const Seconds device_ref = device0 + mean / static_cast<double>(pairs_.size());
-
-  // Lower convex hull (Andrew's monotone chain); among equal device times only the earliest host
-  // time can be on it.
-  struct P {
-    double x, y;
-  };
-  std::vector<P> hull;
-  hull.reserve(pairs_.size());
-  for (const auto& q : pairs_) {
-    const P c{q.device - device_ref, q.host - host0};
-    if (!hull.empty() && c.x == hull.back().x) {
-      if (c.y >= hull.back().y) continue;
-      hull.pop_back();
-    }
-    while (hull.size() >= 2) {
-      const P& a = hull[hull.size() - 2];
-      const P& b = hull.back();
-      const double cross = (b.x - a.x) * (c.y - b.y) - (b.y - a.y) * (c.x - b.x);
-      if (cross > 0.0) break;  // strictly convex turn: b stays
-      hull.pop_back();
-    }
-    hull.push_back(c);
-  }
+  if (!hull_valid_) RebuildHull();
+  // Work relative to the mean device time (precision with epoch times).
+  const double mean = sum_x_ / static_cast<double>(pairs_.size());
+  const Seconds device_ref = origin_.device + mean;
+  const Seconds host0 = origin_.host;
+  std::vector<Point> hull(hull_);
+  for (auto& h : hull) h.x -= mean;
 
   ClockMapping m;
   m.device_ref = device_ref;
@@ -106,8 +129,8 @@ ClockMapping ClockSync::Fit() const {
     // TICSync: the hull edge over the mean device time (x = 0) minimises the summed delays.
     std::size_t i = 0;
     while (i + 2 < hull.size() && hull[i + 1].x < 0.0) ++i;
-    const P& a = hull[i];
-    const P& b = hull[i + 1];
+    const Point& a = hull[i];
+    const Point& b = hull[i + 1];
     const double rate = (b.y - a.y) / (b.x - a.x);
     if (std::abs(rate - 1.0) <= options_.max_abs_skew) {
       m.rate = rate;
@@ -168,6 +191,9 @@ void ClockSync::RemoveEarlyOutliers() {
   if (pairs_.size() != before) {
     rejected_ += static_cast<int>(before - pairs_.size());
     cache_.reset();
+    hull_valid_ = false;
+    sum_x_ = 0.0;
+    for (const auto& q : pairs_) sum_x_ += q.device - origin_.device;
   }
 }
 

@@ -43,7 +43,8 @@ struct ClockMapping {
 };
 
 struct ClockSyncOptions {
-  double window{60.0};           ///< [s] of device time whose pairs enter the estimate (tracks drift)
+  double window{60.0};           ///< [s] of device time whose pairs enter the estimate (tracks drift);
+                                 ///< trimmed once they span 10 % more, so the hull is rebuilt rarely
   int max_pairs{20000};          ///< hard cap on pairs kept (oldest dropped first)
   double latency{0.0};           ///< [s] known minimum delay of the host's observations, subtracted
   double max_early{0.002};       ///< [s] a pair this far below the current line is rejected as
@@ -83,15 +84,27 @@ class ClockSync {
     Seconds device;
     Seconds host;
   };
+  struct Point {  // a pair relative to origin_ (precision with epoch times)
+    double x, y;
+  };
   void Trim();
   ClockMapping Fit() const;
   void RemoveEarlyOutliers();
+  void RebuildHull() const;
+  void AppendToHull(const Point& c) const;
 
   ClockSyncOptions options_;
   std::deque<Pair> pairs_;  // sorted by device time
+  // The lower convex hull of pairs_, kept up to date as pairs arrive in order (O(1) amortised)
+  // and rebuilt only when pairs leave or arrive out of order: the fit is then O(hull), not O(n).
+  mutable std::vector<Point> hull_;
+  mutable bool hull_valid_{false};
+  mutable Pair origin_{0.0, 0.0};
+  mutable double sum_x_{0.0};  // sum of (device - origin_.device) over pairs_, for the mean device time
   mutable std::optional<ClockMapping> cache_;
   std::optional<ClockMapping> gate_;  // slightly stale map used to judge new pairs (refit every 32)
   int since_gate_{0};
+  Seconds gate_device_{0.0};  // newest device time when the gate was refitted
   int rejected_{0};
   int consecutive_rejects_{0};
   int restarts_{0};

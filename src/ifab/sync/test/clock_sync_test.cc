@@ -50,6 +50,37 @@ TEST(ClockSync, RecoversOffsetAndSkewDespiteLateObservations) {
   }
 }
 
+// The hull is kept incrementally for pairs in order and rebuilt otherwise: both give one answer.
+TEST(ClockSync, SameMapInAnyArrivalOrderAndAcrossWindowTrims) {
+  const SyntheticClock clock;
+  RandomStream rng(7);
+  std::vector<std::pair<double, double>> pairs;
+  for (int k = 0; k < 4000; ++k) {
+    const double device = 1e6 + k * 0.0025;  // 400 Hz, epoch-sized times
+    pairs.emplace_back(device, clock.Host(device) + Delay(rng));
+  }
+  ClockSyncOptions o;
+  o.max_early = 0.0;  // judge nothing: both see the same pairs
+  o.max_late = 0.0;
+  ClockSync in_order(o), shuffled(o);
+  for (const auto& [d, h] : pairs) in_order.AddPair(d, h);
+  std::vector<std::pair<double, double>> mixed = pairs;
+  for (std::size_t i = 0; i + 1 < mixed.size(); i += 7) std::swap(mixed[i], mixed[i + 1]);
+  for (const auto& [d, h] : mixed) shuffled.AddPair(d, h);
+  EXPECT_NEAR(*in_order.ToHost(1e6 + 5.0), *shuffled.ToHost(1e6 + 5.0), 1e-9);
+  EXPECT_NEAR(in_order.Mapping()->rate, shuffled.Mapping()->rate, 1e-9);
+  // A short window trims in batches; the map still follows the clock.
+  o.window = 2.0;
+  ClockSync windowed(o);
+  for (const auto& [d, h] : pairs) {
+    windowed.AddPair(d, h);
+    if (d > 1e6 + 1.0) {  // after 1 s of pairs
+      EXPECT_NEAR(*windowed.ToHost(d) - clock.Host(d), 0.0, 2e-4);
+    }
+  }
+  EXPECT_LE(windowed.size(), 2.2 / 0.0025 + 1);
+}
+
 TEST(ClockSync, BeatsLeastSquaresByTheMeanDelay) {
   const SyntheticClock clock;
   RandomStream rng(7);
