@@ -11,6 +11,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 
 #include "ifab/arm/primitives.h"
 #include "ifab/core/angles.h"
@@ -25,8 +26,8 @@
 #include "ifab/perception/registration.h"
 #include "ifab/perception/scan_assembly.h"
 #include "ifab/perception/sweep_io.h"
+#include "ifab/sequencer/laser_sweeps.h"
 #include "ifab/sim/sim_robot.h"
-#include "ifab/sync/clock_sync.h"
 
 namespace ifab::experiments {
 namespace {
@@ -37,148 +38,6 @@ using nlohmann::json;
 std::string Relative(const ConfigNode& c, const std::string& key) {
   return (fs::path(c.file()).parent_path() / c.Get<std::string>(key)).string();
 }
-
-// One sweep: joint (0-based) from -> to at speed, the other joints at the scan pose, offset by
-// `pose_offset` (e.g. joint 6 turned 90 deg so the scan plane crosses a joint-1 sweep).
-struct SweepSpec {
-  int joint{4};
-  double from{0.0}, to{0.0};  // relative to the aimed scan pose [rad]
-  double speed{0.17};         // [rad/s]
-  Vector6d pose_offset{Vector6d::Zero()};
-  // The centre beam aims this far off the target [m], along (radial, lateral): radial points from
-  // the arm's foot to the target, lateral 90 deg to its left. A scan line across the arm (joint 6
-  // at 0) aimed at a lateral offset crosses the target mid-sweep when joints 2, 3 or 5 sweep.
-  Eigen::Vector2d aim_offset{Eigen::Vector2d::Zero()};
-};
-
-std::vector<SweepSpec> ReadSweeps(const ConfigNode& list) {
-  list.ExpectSequence();
-  std::vector<SweepSpec> out;
-  for (std::size_t i = 0; i < list.size(); ++i) {
-    const ConfigNode s = list[i];
-    s.ExpectKeys({"joint", "range_deg", "speed_deg_s", "offset_deg", "aim_offset"});
-    SweepSpec spec;
-    const int joint = s.Get<int>("joint");
-    if (joint < 1 || joint > 6) s["joint"].Fail("a joint number 1..6");
-    spec.joint = joint - 1;
-    const auto r = s["range_deg"].AsNumbers(2);
-    spec.from = DegToRad(r[0]);
-    spec.to = DegToRad(r[1]);
-    double speed = 10.0;
-    s.ReadPositive("speed_deg_s", speed);
-    spec.speed = DegToRad(speed);
-    if (auto a = s.Find("aim_offset")) {
-      const auto v = a->AsNumbers(2);
-      spec.aim_offset = Eigen::Vector2d(v[0], v[1]);
-    }
-    if (auto o = s.Find("offset_deg")) {
-      const auto v = o->AsNumbers(6);
-      for (int k = 0; k < 6; ++k) spec.pose_offset[k] = DegToRad(v[static_cast<std::size_t>(k)]);
-    }
-    out.push_back(spec);
-  }
-  return out;
-}
-
-// A scan pose whose laser centre beam meets the floor at `target` (base frame): joint 1 turns
-// towards it, joint 5 tilts the laser until the beam lands at its distance (design model).
-Vector6d AimAt(const RobotModel& robot, const Eigen::Vector2d& target, const Vector6d& posture) {
-  Vector6d q = posture;
-  const Eigen::Vector3d foot = robot.T_base_arm_base.translation();
-  q[0] = std::atan2(target.y() - foot.y(), target.x() - foot.x());
-  auto miss = [&](double q5) {
-    Vector6d qq = q;
-    qq[4] = q5;
-    const Pose3 T = robot.T_base_arm_base * robot.ArmForwardKinematics(qq) * robot.T_tool0_arm_laser;
-    const Eigen::Vector3d o = T.translation(), d = T.linear().col(0);
-    if (d.z() > -0.2) return 1e9;
-    const Eigen::Vector3d hit = o - (o.z() / d.z()) * d;
-    return (hit.head<2>() - target).norm();
-  };
-  double best = q[4], best_miss = miss(q[4]);
-  for (double q5 = 0.3; q5 <= 2.0; q5 += 0.005) {
-    const double m = miss(q5);
-    if (m < best_miss) {
-      best_miss = m;
-      best = q5;
-    }
-  }
-  q[4] = best;
-  return q;
-}
-
-// Drives the arm laser through sweeps on the simulator and returns them in host time, the
-// devices' clocks mapped by TICSync-style sync from the pulses seen so far.
-class SweepRecorder {
- public:
-  SweepRecorder(sim::SimRobot& sim, arm::ArmPrimitives& arm, Vector6d q) : sim_(sim), arm_(arm), q_(q) {}
-
-  // A sweep about the scan pose aimed at `target` (+ the spec's aim offset), base frame.
-  SweepRecording Record(const Eigen::Vector2d& target, const Vector6d& posture, const SweepSpec& spec, bool reverse,
-                        const std::string& name) {
-    // The aim point sits `lateral` beside the target as seen from itself (so the scan line
-    // across the arm passes through the target: Thales), and `radial` further out.
-    const Eigen::Vector2d foot = arm_.robot().T_base_arm_base.translation().head<2>();
-    const double D = (target - foot).norm();
-    const double L = std::clamp(spec.aim_offset.y(), -0.9 * D, 0.9 * D);
-    const double bearing = std::atan2(target.y() - foot.y(), target.x() - foot.x()) + std::asin(L / D);
-    const double reach = std::sqrt(D * D - L * L) + spec.aim_offset.x();
-    const Vector6d aim = AimAt(arm_.robot(), foot + reach * Eigen::Vector2d(std::cos(bearing), std::sin(bearing)), posture);
-    Vector6d start = aim + spec.pose_offset;
-    double from = start[spec.joint] + spec.from, to = start[spec.joint] + spec.to;
-    if (reverse) std::swap(from, to);
-    start[spec.joint] = from;
-    // SweepJoint holds the other joints where they are: move the whole arm to the start first.
-    arm::PrimitiveResult plan = arm_.MoveToJoints(q_, start);
-    if (!plan.ok) throw std::runtime_error("sweep '" + name + "': " + plan.message);
-    plan.Append(arm_.SweepJoint(plan.q_end, spec.joint, from, to, spec.speed));
-    if (!plan.ok) throw std::runtime_error("sweep '" + name + "': " + plan.message);
-    std::vector<arm::ArmStep> move(plan.steps.begin(), plan.steps.end() - 1);
-    const arm::ArmStep sweep = plan.steps.back();
-    if (!move.empty()) Execute(move, name);
-    sim_.Wait(0.3);
-    Drain(nullptr);  // the move: only its sync pulses matter
-    Execute({sweep}, name);
-    sim_.Wait(0.1);
-    SweepRecording rec;
-    rec.name = name;
-    Drain(&rec);
-    std::vector<LaserScan> scans;
-    for (auto& s : rec.scans)
-      if (laser_sync_.Apply(s.stamp)) scans.push_back(s);
-    rec.scans = std::move(scans);
-    for (auto& j : rec.joint_states) arm_sync_.Apply(j.stamp);
-    q_ = plan.q_end;
-    return rec;
-  }
-
- private:
-  void Execute(const std::vector<arm::ArmStep>& steps, const std::string& name) {
-    const arm::ExecuteResult r = arm::ExecuteSteps(sim_, steps);
-    if (!r.ok) throw std::runtime_error("sweep '" + name + "': " + r.message);
-  }
-  void Drain(SweepRecording* rec) {
-    auto scans = sim_.TakeLaserScans(DeviceId::kArmLaser);
-    auto joints = sim_.TakeJointStates();
-    for (const auto& p : sim_.TakeSyncPulses()) {
-      if (p.device == DeviceId::kArmLaser) laser_sync_.AddPulse(p);
-      if (p.device == DeviceId::kArm) arm_sync_.AddPulse(p);
-    }
-    for (const auto& s : scans) laser_sync_.AddPacket(s.stamp);
-    for (const auto& j : joints) arm_sync_.AddPacket(j.stamp);
-    sim_.TakeLaserScans(DeviceId::kBaseLaser);
-    sim_.TakeGyroSamples();
-    if (rec) {
-      rec->scans = std::move(scans);
-      rec->joint_states = std::move(joints);
-    }
-  }
-
-  sim::SimRobot& sim_;
-  arm::ArmPrimitives& arm_;
-  Vector6d q_;
-  DeviceClockSync laser_sync_, arm_sync_;
-};
 
 // What both experiments share: the simulated machine, the design model and the arm.
 struct Setup {
@@ -234,33 +93,33 @@ Stats Statistics(const std::vector<std::array<double, 6>>& v, const std::array<d
 json Xyz(const std::array<double, 6>& v) { return {{"x", v[0]}, {"y", v[1]}, {"z", v[2]}}; }
 json Rpy(const std::array<double, 6>& v) { return {{"roll", v[3]}, {"pitch", v[4]}, {"yaw", v[5]}}; }
 
-// One calibration data set: the robot placed so the cube sits at `cube_in_base` (x y yaw, its
-// design placement; the true one differs a little), the cube swept with every sweep spec.
-std::vector<CalibrationSweep> RecordCalibrationSet(const Setup& setup, const std::vector<SweepSpec>& sweeps,
-                                                   const Eigen::Vector3d& cube_in_base, double cube_size,
+// The simulated robot placed so that the cube truly sits at T_base_cube_true (the plan's
+// cube_in_base is its design placement, which the sweeps aim at).
+std::unique_ptr<sim::SimRobot> CubeSim(const Setup& setup, const sequencer::LaserCalibrationPlan& plan,
+                                       const Pose3& T_base_cube_true, std::uint64_t seed) {
+  // The cube stands at the site origin; the robot is placed around it.
+  const Pose3 T_site_cube = PoseFromXyzRpy(0.0, 0.0, 0.5 * plan.cube_size, 0.0, 0.0, 0.0);
+  const auto b = XyzRpyFromPose(T_site_cube * T_base_cube_true.inverse());
+  auto sim = std::make_unique<sim::SimRobot>(setup.sim, Pose2(b[0], b[1], b[5]), plan.scan_posture, seed);
+  sim->mutable_world().AddBrick({"cube", T_site_cube, Box{Eigen::Vector3d::Constant(plan.cube_size)}});
+  return sim;
+}
+
+// One calibration data set: the cube swept as the plan says.
+std::vector<CalibrationSweep> RecordCalibrationSet(const Setup& setup, const sequencer::LaserCalibrationPlan& plan,
                                                    const Pose3& T_base_cube_true, std::uint64_t seed,
                                                    const RunContext& ctx, const std::string& label,
-                                                   const std::string& save_dir = "", const std::string& file_prefix = "") {
-  // The cube stands at the site origin; the robot is placed around it.
-  const Pose3 T_site_cube = PoseFromXyzRpy(0.0, 0.0, 0.5 * cube_size, 0.0, 0.0, 0.0);
-  const Pose3 T_site_base3 = T_site_cube * T_base_cube_true.inverse();
-  const auto b = XyzRpyFromPose(T_site_base3);
-  sim::SimRobot sim(setup.sim, Pose2(b[0], b[1], b[5]), setup.posture, seed);
-  sim.mutable_world().AddBrick({"cube", T_site_cube, Box{Eigen::Vector3d::Constant(cube_size)}});
+                                                   const std::string& save_dir, const std::string& file_prefix) {
+  const auto sim = CubeSim(setup, plan, T_base_cube_true, seed);
   arm::ArmPrimitives arm(setup.robot, setup.arm);
-  SweepRecorder recorder(sim, arm, setup.posture);
-  ScanAssemblyOptions assembly;
-  assembly.beam_stride = setup.beam_stride;
-  std::vector<CalibrationSweep> out;
-  for (std::size_t k = 0; k < sweeps.size(); ++k) {
-    const std::string name = fmt::format("{} sweep {} (joint {})", label, k + 1, sweeps[k].joint + 1);
-    ctx.Progress(name);
-    const SweepRecording rec = recorder.Record(cube_in_base.head<2>(), setup.posture, sweeps[k], k % 2 == 1, name);
-    if (!save_dir.empty())
-      SaveSweep((fs::path(save_dir) / fmt::format("{}_sweep_{}.json", file_prefix, k + 1)).string(), rec);
-    out.push_back({name, AssembleSweep(rec.scans, rec.joint_states, setup.robot, assembly).points});
-  }
-  return out;
+  sequencer::SweepRecorder recorder(*sim, arm, plan.scan_posture);
+  std::vector<SweepRecording> raw;
+  auto sets = sequencer::RecordCubeSweeps(recorder, setup.robot, plan,
+                                          [&](const std::string& what) { ctx.Progress(label + ": " + what); },
+                                          save_dir.empty() ? nullptr : &raw);
+  for (std::size_t k = 0; k < raw.size(); ++k)
+    SaveSweep((fs::path(save_dir) / fmt::format("{}_sweep_{}.json", file_prefix, k + 1)).string(), raw[k]);
+  return sets;
 }
 
 // ---- Table I -------------------------------------------------------------------------------
@@ -272,7 +131,7 @@ json RunRegistrationConsistency(const RunContext& ctx) {
                 "registration", "save_sweeps"});
   const bool save_sweeps = c.Get<bool>("save_sweeps", false);
   const Setup setup = ReadSetup(c);
-  const std::vector<SweepSpec> sweeps = ReadSweeps(c["sweeps"]);
+  const std::vector<sequencer::SweepSpec> sweeps = sequencer::ReadSweepSpecs(c["sweeps"]);
   int passes = 2;
   c.ReadPositive("passes", passes);
   const auto bb = c["brick_in_base"].AsNumbers(3);  // x y [m], yaw [deg]
@@ -290,19 +149,16 @@ json RunRegistrationConsistency(const RunContext& ctx) {
   json mount_info;
   const std::string mount = c.Get<std::string>("mount", "calibrate");
   if (mount == "calibrate") {
+    // The section may name its own scan posture and beam stride; else the experiment's apply.
     const ConfigNode k = c["calibration"];
-    k.ExpectKeys({"cube_in_base", "cube_size", "sweeps", "calibration"});
-    const auto cb = k["cube_in_base"].AsNumbers(3);
-    const double size = k.Get<double>("cube_size", 0.25);
-    CalibrationOptions copt;
-    if (auto o = k.Find("calibration")) copt = CalibrationOptions::FromConfig(*o);
-    const Pose3 T_base_cube = PoseFromXyzRpy(cb[0], cb[1], 0.5 * size, 0, 0, DegToRad(cb[2]));
-    const auto sets = RecordCalibrationSet(setup, ReadSweeps(k["sweeps"]), Eigen::Vector3d(cb[0], cb[1], cb[2]), size,
-                                           T_base_cube, ctx.seed, ctx, "calibration",
-                                           save_sweeps ? ctx.out_dir : "", "calibration");
-    ctx.Progress("calibrating the arm laser mount");
-    const CalibrationSummary cs =
-        CalibrateLaserMount(sets, CubeOnGroundBodies(size, T_base_cube), setup.robot.T_tool0_arm_laser, copt);
+    sequencer::LaserCalibrationPlan plan = sequencer::LaserCalibrationPlan::FromConfig(k);
+    if (!k.Has("scan_posture_deg")) plan.scan_posture = setup.posture;
+    if (!k.Has("beam_stride")) plan.beam_stride = setup.beam_stride;
+    // To keep the sweeps, record them once more apart (same seed: the same sweeps).
+    if (save_sweeps) RecordCalibrationSet(setup, plan, plan.T_base_cube(), ctx.seed, ctx, "calibration", ctx.out_dir, "calibration");
+    const auto cube_sim = CubeSim(setup, plan, plan.T_base_cube(), ctx.seed);
+    const CalibrationSummary cs = sequencer::CalibrateArmLaser(*cube_sim, setup.robot, setup.arm, plan, plan.scan_posture,
+                                                               [&](const std::string& what) { ctx.Progress(what); });
     if (!cs.IsUsable()) throw std::runtime_error("mount calibration failed: " + cs.message);
     T_tool0_laser = cs.T_tool0_laser;
     mount_info = {{"source", "calibrated"}, {"message", cs.message}};
@@ -330,7 +186,7 @@ json RunRegistrationConsistency(const RunContext& ctx) {
   const Pose3 T_base_brick = T_base_site_true * T_site_brick;  // truth, for scoring
 
   arm::ArmPrimitives arm(setup.robot, setup.arm);
-  SweepRecorder recorder(sim, arm, setup.posture);
+  sequencer::SweepRecorder recorder(sim, arm, setup.posture);
   ScanAssemblyOptions assembly;
   assembly.beam_stride = setup.beam_stride;
 
@@ -422,15 +278,18 @@ json RunCalibrationConsistency(const RunContext& ctx) {
                 "save_sweeps"});
   const bool save_sweeps = c.Get<bool>("save_sweeps", false);
   const Setup setup = ReadSetup(c);
-  const std::vector<SweepSpec> sweeps = ReadSweeps(c["sweeps"]);
-  const double size = c.Get<double>("cube_size", 0.25);
+  sequencer::LaserCalibrationPlan plan;
+  plan.sweeps = sequencer::ReadSweepSpecs(c["sweeps"]);
+  plan.scan_posture = setup.posture;
+  plan.beam_stride = setup.beam_stride;
+  c.ReadPositive("cube_size", plan.cube_size);
+  const double size = plan.cube_size;
   const auto place_sigma = c["cube_placement_sigma"].AsNumbers(2);
   const auto guess = c["initial_guess"].AsNumbers(2);  // +- [m], +- [deg]
   int trials = 20, jobs = 1;
   c.ReadPositive("trials", trials);
   c.ReadPositive("jobs", jobs);
-  CalibrationOptions copt;
-  if (auto o = c.Find("calibration")) copt = CalibrationOptions::FromConfig(*o);
+  if (auto o = c.Find("calibration")) plan.calibration = CalibrationOptions::FromConfig(*o);
   const ConfigNode ds = c["datasets"];
   ds.ExpectSequence();
   RandomStream rng(ctx.seed);
@@ -450,8 +309,8 @@ json RunCalibrationConsistency(const RunContext& ctx) {
         T_base_cube_design * PoseFromXyzRpy(rng.Normal(place_sigma[0]), rng.Normal(place_sigma[0]), 0, 0, 0,
                                             DegToRad(rng.Normal(place_sigma[1])));
     const std::string label = fmt::format("data set {}", d + 1);
-    const auto recorded = RecordCalibrationSet(setup, sweeps, Eigen::Vector3d(cb[0], cb[1], cb[2]), size,
-                                               T_base_cube_true, ctx.seed + 100 * (d + 1), ctx, label,
+    plan.cube_in_base = Eigen::Vector3d(cb[0], cb[1], DegToRad(cb[2]));
+    const auto recorded = RecordCalibrationSet(setup, plan, T_base_cube_true, ctx.seed + 100 * (d + 1), ctx, label,
                                                save_sweeps ? ctx.out_dir : "", fmt::format("dataset_{}", d + 1));
     // 20 trials from random guesses of the mount, the cube and the ground (+-0.02 m, +-3 deg).
     std::vector<std::array<double, 6>> initial(static_cast<std::size_t>(trials));
@@ -475,7 +334,7 @@ json RunCalibrationConsistency(const RunContext& ctx) {
         auto bodies = CubeOnGroundBodies(size, guesses_cube[static_cast<std::size_t>(t)],
                                          guesses_ground[static_cast<std::size_t>(t)]);
         results[static_cast<std::size_t>(t)] =
-            CalibrateLaserMount(recorded, bodies, guesses_mount[static_cast<std::size_t>(t)], copt);
+            CalibrateLaserMount(recorded, bodies, guesses_mount[static_cast<std::size_t>(t)], plan.calibration);
       });
     });
     std::vector<Pose3> mounts;

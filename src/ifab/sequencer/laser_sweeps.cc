@@ -1,0 +1,216 @@
+#include "ifab/sequencer/laser_sweeps.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "ifab/core/angles.h"
+#include "ifab/core/config.h"
+#include "ifab/perception/scan_assembly.h"
+
+namespace ifab::sequencer {
+
+std::vector<SweepSpec> ReadSweepSpecs(const ConfigNode& list) {
+  list.ExpectSequence();
+  std::vector<SweepSpec> out;
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const ConfigNode s = list[i];
+    s.ExpectMap();
+    s.ExpectKeys({"joint", "range_deg", "speed_deg_s", "offset_deg", "aim_offset"});
+    SweepSpec spec;
+    const int joint = s.Get<int>("joint");
+    if (joint < 1 || joint > 6) s["joint"].Fail("a joint number 1..6");
+    spec.joint = joint - 1;
+    const auto r = s["range_deg"].AsNumbers(2);
+    if (r[0] == r[1]) s["range_deg"].Fail("two different angles [from, to]");
+    spec.from = DegToRad(r[0]);
+    spec.to = DegToRad(r[1]);
+    double speed = 10.0;
+    s.ReadPositive("speed_deg_s", speed);
+    spec.speed = DegToRad(speed);
+    if (auto a = s.Find("aim_offset")) {
+      const auto v = a->AsNumbers(2);
+      spec.aim_offset = Eigen::Vector2d(v[0], v[1]);
+    }
+    if (auto o = s.Find("offset_deg")) {
+      const auto v = o->AsNumbers(6);
+      for (int k = 0; k < 6; ++k) spec.pose_offset[k] = DegToRad(v[static_cast<std::size_t>(k)]);
+    }
+    out.push_back(spec);
+  }
+  return out;
+}
+
+Vector6d AimAt(const RobotModel& robot, const Eigen::Vector2d& target_in_base, const Vector6d& posture) {
+  Vector6d q = posture;
+  const Eigen::Vector3d foot = robot.T_base_arm_base.translation();
+  q[0] = std::atan2(target_in_base.y() - foot.y(), target_in_base.x() - foot.x());
+  // Where the centre beam (the laser's x axis) meets the floor, as a function of joint 5.
+  auto miss = [&](double q5) {
+    Vector6d qq = q;
+    qq[4] = q5;
+    const Pose3 T_base_laser = robot.T_base_arm_base * robot.ArmForwardKinematics(qq) * robot.T_tool0_arm_laser;
+    const Eigen::Vector3d o = T_base_laser.translation(), d = T_base_laser.linear().col(0);
+    if (d.z() > -0.2) return 1e9;  // looking too flat to meet the floor nearby
+    const Eigen::Vector3d hit = o - (o.z() / d.z()) * d;
+    return (hit.head<2>() - target_in_base).norm();
+  };
+  double best = q[4], best_miss = miss(q[4]);
+  for (double q5 = 0.3; q5 <= 2.0; q5 += 0.005) {
+    const double m = miss(q5);
+    if (m < best_miss) {
+      best_miss = m;
+      best = q5;
+    }
+  }
+  q[4] = best;
+  return q;
+}
+
+SweepRecorder::SweepRecorder(hal::Robot& robot, arm::ArmPrimitives& arm, const Vector6d& q, SweepRecorderOptions options)
+    : robot_(robot), arm_(arm), q_(q), options_(options) {}
+
+SweepRecording SweepRecorder::Record(const Eigen::Vector2d& target_in_base, const Vector6d& posture,
+                                     const SweepSpec& spec, bool reverse, const std::string& name) {
+  // The aim point sits `lateral` beside the target as seen from itself (so the scan line across
+  // the arm passes through the target: Thales), and `radial` further out.
+  const Eigen::Vector2d foot = arm_.robot().T_base_arm_base.translation().head<2>();
+  const double D = (target_in_base - foot).norm();
+  const double L = std::clamp(spec.aim_offset.y(), -0.9 * D, 0.9 * D);
+  const double bearing =
+      std::atan2(target_in_base.y() - foot.y(), target_in_base.x() - foot.x()) + std::asin(L / D);
+  const double reach = std::sqrt(D * D - L * L) + spec.aim_offset.x();
+  const Vector6d aim =
+      AimAt(arm_.robot(), foot + reach * Eigen::Vector2d(std::cos(bearing), std::sin(bearing)), posture);
+  Vector6d start = aim + spec.pose_offset;
+  double from = start[spec.joint] + spec.from, to = start[spec.joint] + spec.to;
+  if (reverse) std::swap(from, to);
+  start[spec.joint] = from;
+  // SweepJoint holds the other joints where they are: move the whole arm to the start first.
+  arm::PrimitiveResult plan = arm_.MoveToJoints(q_, start);
+  if (!plan.ok) throw std::runtime_error("sweep '" + name + "': " + plan.message);
+  plan.Append(arm_.SweepJoint(plan.q_end, spec.joint, from, to, spec.speed));
+  if (!plan.ok) throw std::runtime_error("sweep '" + name + "': " + plan.message);
+  std::vector<arm::ArmStep> move(plan.steps.begin(), plan.steps.end() - 1);
+  const arm::ArmStep sweep = plan.steps.back();
+  // The laser is on from the move on, so that its clock sync has pulses before the sweep.
+  robot_.SetLaserActive(DeviceId::kArmLaser, true);
+  if (!move.empty()) Execute(move, name);
+  robot_.Wait(options_.settle_time);
+  Drain(nullptr);  // the move: only its sync pulses matter
+  Execute({sweep}, name);
+  robot_.Wait(options_.tail_time);
+  robot_.SetLaserActive(DeviceId::kArmLaser, options_.laser_on_between_sweeps);
+  SweepRecording rec;
+  rec.name = name;
+  Drain(&rec);
+  std::vector<LaserScan> scans;
+  for (auto& s : rec.scans)
+    if (laser_sync_.Apply(s.stamp)) scans.push_back(s);
+  rec.scans = std::move(scans);
+  std::vector<JointState> joints;
+  for (auto& j : rec.joint_states)
+    if (arm_sync_.Apply(j.stamp)) joints.push_back(j);
+  rec.joint_states = std::move(joints);
+  q_ = plan.q_end;
+  return rec;
+}
+
+void SweepRecorder::MoveTo(const Vector6d& q, const std::string& name) {
+  const arm::PrimitiveResult plan = arm_.MoveToJoints(q_, q);
+  if (!plan.ok) throw std::runtime_error(name + ": " + plan.message);
+  if (!plan.steps.empty()) Execute(plan.steps, name);
+  Drain(nullptr);
+  q_ = plan.q_end;
+}
+
+void SweepRecorder::Execute(const std::vector<arm::ArmStep>& steps, const std::string& name) {
+  const arm::ExecuteResult r = arm::ExecuteSteps(robot_, steps);
+  if (!r.ok) throw std::runtime_error("sweep '" + name + "': " + r.message);
+}
+
+void SweepRecorder::Drain(SweepRecording* rec) {
+  auto scans = robot_.TakeLaserScans(DeviceId::kArmLaser);
+  auto joints = robot_.TakeJointStates();
+  DrainedData other;
+  other.sync_pulses = robot_.TakeSyncPulses();
+  for (const auto& p : other.sync_pulses) {
+    if (p.device == DeviceId::kArmLaser) laser_sync_.AddPulse(p);
+    if (p.device == DeviceId::kArm) arm_sync_.AddPulse(p);
+  }
+  for (const auto& s : scans) laser_sync_.AddPacket(s.stamp);
+  for (const auto& j : joints) arm_sync_.AddPacket(j.stamp);
+  other.base_laser_scans = robot_.TakeLaserScans(DeviceId::kBaseLaser);
+  other.gyro_samples = robot_.TakeGyroSamples();
+  if (on_other_data) on_other_data(std::move(other));
+  if (rec) {
+    rec->scans = std::move(scans);
+    rec->joint_states = std::move(joints);
+  }
+}
+
+LaserCalibrationPlan LaserCalibrationPlan::FromConfig(const ConfigNode& config) {
+  config.ExpectMap();
+  config.ExpectKeys({"cube_in_base", "cube_size", "sweeps", "scan_posture_deg", "beam_stride", "calibration"});
+  LaserCalibrationPlan plan;
+  const auto cb = config["cube_in_base"].AsNumbers(3);
+  plan.cube_in_base = Eigen::Vector3d(cb[0], cb[1], DegToRad(cb[2]));
+  config.ReadPositive("cube_size", plan.cube_size);
+  plan.sweeps = ReadSweepSpecs(config["sweeps"]);
+  if (plan.sweeps.empty()) config["sweeps"].Fail("at least one sweep");
+  plan.scan_posture << 0.0, DegToRad(17.0), DegToRad(17.0), 0.0, DegToRad(69.0), 0.0;
+  if (auto p = config.Find("scan_posture_deg")) {
+    const auto v = p->AsNumbers(6);
+    for (int k = 0; k < 6; ++k) plan.scan_posture[k] = DegToRad(v[static_cast<std::size_t>(k)]);
+  }
+  config.ReadPositive("beam_stride", plan.beam_stride);
+  if (auto o = config.Find("calibration")) plan.calibration = CalibrationOptions::FromConfig(*o);
+  return plan;
+}
+
+Pose3 LaserCalibrationPlan::T_base_cube() const {
+  return PoseFromXyzRpy(cube_in_base.x(), cube_in_base.y(), 0.5 * cube_size, 0.0, 0.0, cube_in_base.z());
+}
+
+std::vector<CalibrationSweep> RecordCubeSweeps(SweepRecorder& recorder, const RobotModel& model,
+                                               const LaserCalibrationPlan& plan,
+                                               const std::function<void(const std::string&)>& progress,
+                                               std::vector<SweepRecording>* raw) {
+  ScanAssemblyOptions assembly;
+  assembly.beam_stride = plan.beam_stride;
+  std::vector<CalibrationSweep> out;
+  for (std::size_t k = 0; k < plan.sweeps.size(); ++k) {
+    const std::string name = fmt::format("calibration sweep {} of {} (joint {})", k + 1, plan.sweeps.size(),
+                                         plan.sweeps[k].joint + 1);
+    if (progress) progress(name);
+    SweepRecording rec = recorder.Record(plan.cube_in_base.head<2>(), plan.scan_posture, plan.sweeps[k], k % 2 == 1, name);
+    out.push_back({name, AssembleSweep(rec.scans, rec.joint_states, model, assembly).points});
+    if (raw) raw->push_back(std::move(rec));
+  }
+  return out;
+}
+
+CalibrationSummary CalibrateArmLaser(hal::Robot& robot, const RobotModel& model, const arm::ArmOptions& arm_options,
+                                     const LaserCalibrationPlan& plan, const Vector6d& q_start,
+                                     const std::function<void(const std::string&)>& progress) {
+  arm::ArmPrimitives arm(model, arm_options);
+  SweepRecorder recorder(robot, arm, q_start);
+  std::vector<CalibrationSweep> sweeps;
+  try {
+    sweeps = RecordCubeSweeps(recorder, model, plan, progress);
+    recorder.MoveTo(q_start, "back to the start after calibration sweeps");
+  } catch (const std::runtime_error& e) {
+    CalibrationSummary failed;
+    failed.status = RegistrationStatus::kNoPoints;
+    failed.message = e.what();
+    failed.T_tool0_laser = model.T_tool0_arm_laser;
+    return failed;
+  }
+  if (progress) progress("calibrating the arm laser mount");
+  return CalibrateLaserMount(sweeps, CubeOnGroundBodies(plan.cube_size, plan.T_base_cube()), model.T_tool0_arm_laser,
+                             plan.calibration);
+}
+
+}  // namespace ifab::sequencer

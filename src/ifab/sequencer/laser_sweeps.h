@@ -1,0 +1,134 @@
+#pragma once
+/// \file
+/// Arm laser sweeps on any hal::Robot, and the arm laser's extrinsic calibration from sweeps of a
+/// cube on the floor (paper Sec. V-A and V-C). A sweep turns one joint while the arm laser scans;
+/// scans and joint states are mapped to host time by TICSync-style sync from the devices' pulses
+/// (sync module), then assembled with eq. 6 (perception). Used by the mission and by the Table I
+/// and Table II experiments; the robot is reached only through hal::Robot.
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "ifab/arm/primitives.h"
+#include "ifab/hal/robot.h"
+#include "ifab/model/robot_model.h"
+#include "ifab/perception/calibration.h"
+#include "ifab/perception/sweep_io.h"
+#include "ifab/sync/clock_sync.h"
+
+namespace ifab {
+class ConfigNode;
+}
+
+namespace ifab::sequencer {
+
+/// One sweep: joint `joint` (0-based) from `from` to `to` about the aimed scan pose, the other
+/// joints at the scan pose plus `pose_offset` (e.g. joint 6 turned 90 deg so the scan plane
+/// crosses a joint-1 sweep).
+struct SweepSpec {
+  int joint{4};                    ///< swept joint, 0-based
+  double from{0.0};                ///< [rad] start, relative to the aimed scan pose
+  double to{0.0};                  ///< [rad] end, relative to the aimed scan pose
+  double speed{0.17};              ///< [rad/s]
+  Vector6d pose_offset{Vector6d::Zero()};  ///< [rad] added to the aimed scan pose
+  /// [m] the centre beam aims this far off the target along (radial, lateral): radial points
+  /// from the arm's foot to the target, lateral 90 deg to its left. A scan line across the arm
+  /// (joint 6 at 0) aimed at a lateral offset crosses the target mid-sweep when joints 2, 3 or 5
+  /// sweep.
+  Eigen::Vector2d aim_offset{Eigen::Vector2d::Zero()};
+};
+
+/// Reads a YAML list of sweeps, each
+/// `{joint: 1..6, range_deg: [from, to], speed_deg_s, offset_deg: [6 numbers], aim_offset: [radial, lateral]}`
+/// (speed, offset and aim offset optional). Throws InputError naming the entry and field.
+std::vector<SweepSpec> ReadSweepSpecs(const ConfigNode& list);
+
+/// A scan pose whose laser centre beam meets the floor (z = 0 of base) at `target_in_base`:
+/// joint 1 turns towards it, joint 5 tilts the laser until the beam lands at its distance
+/// (design model). The other joints are the posture's.
+Vector6d AimAt(const RobotModel& robot, const Eigen::Vector2d& target_in_base, const Vector6d& posture);
+
+struct SweepRecorderOptions {
+  double settle_time{0.3};  ///< [s] standstill at the sweep's start pose before sweeping
+  double tail_time{0.1};    ///< [s] wait after the sweep so its last scans arrive
+  /// The arm laser's state between sweeps (hal cannot read it back): a sweep switches the laser
+  /// on and leaves it in this state. The mission keeps it off between sweeps.
+  bool laser_on_between_sweeps{true};
+};
+
+/// What the recorder drains from the robot besides the arm laser's scans and the arm's joint
+/// states: every sync pulse (all devices, also the ones it uses), base laser scans and gyro
+/// samples, handed on so a caller that tracks those devices loses nothing.
+struct DrainedData {
+  std::vector<SyncPulse> sync_pulses;
+  std::vector<LaserScan> base_laser_scans;
+  std::vector<GyroSample> gyro_samples;
+};
+
+/// Drives the arm laser through sweeps and returns them in host time, the devices' clocks mapped
+/// from the pulses seen so far. The base must stand still. Errors of planning or execution throw
+/// std::runtime_error naming the sweep.
+class SweepRecorder {
+ public:
+  /// `q` is the arm's configuration now.
+  SweepRecorder(hal::Robot& robot, arm::ArmPrimitives& arm, const Vector6d& q, SweepRecorderOptions options = {});
+
+  /// A sweep about the scan pose aimed at `target_in_base` (+ the spec's aim offset), from `posture`
+  /// (joints 2, 3, 4, 6; 1 and 5 are aimed). `reverse` sweeps from `to` to `from`.
+  SweepRecording Record(const Eigen::Vector2d& target_in_base, const Vector6d& posture, const SweepSpec& spec,
+                        bool reverse, const std::string& name);
+
+  /// Move the arm to q (e.g. back to where it started).
+  void MoveTo(const Vector6d& q, const std::string& name);
+
+  /// The arm's configuration after the last motion.
+  const Vector6d& q() const { return q_; }
+
+  /// Receives what is drained but not used for the sweep (unset: discarded).
+  std::function<void(DrainedData&&)> on_other_data;
+
+ private:
+  void Execute(const std::vector<arm::ArmStep>& steps, const std::string& name);
+  void Drain(SweepRecording* rec);
+
+  hal::Robot& robot_;
+  arm::ArmPrimitives& arm_;
+  Vector6d q_;
+  SweepRecorderOptions options_;
+  DeviceClockSync laser_sync_, arm_sync_;
+};
+
+/// Where and how to sweep a cube for the arm laser's calibration (Sec. V-C).
+struct LaserCalibrationPlan {
+  Eigen::Vector3d cube_in_base{1.70, 0.0, 0.0};  ///< cube centre x, y [m] and yaw [rad] in base, roughly known
+  double cube_size{0.25};                        ///< [m] edge length (the paper: about 0.25 m)
+  std::vector<SweepSpec> sweeps;                 ///< the paper: 6-8 sweeps of different joints
+  Vector6d scan_posture{Vector6d::Zero()};       ///< [rad] posture before aiming (joints 1 and 5 aimed)
+  int beam_stride{1};                            ///< keep every n-th beam of the scans
+  CalibrationOptions calibration;                ///< the solver's options
+
+  /// Reads `{cube_in_base: [x, y, yaw_deg], cube_size, sweeps: [...], scan_posture_deg: [6],
+  /// beam_stride, calibration: {...}}`; `cube_in_base` and `sweeps` are required.
+  static LaserCalibrationPlan FromConfig(const ConfigNode& config);
+
+  /// The cube's pose in base as planned (standing on z = 0).
+  Pose3 T_base_cube() const;
+};
+
+/// Records the plan's sweeps of the cube with `recorder` (every other sweep reversed), assembled
+/// with eq. 6 but not yet through the mount. `raw` (if given) receives the recordings.
+std::vector<CalibrationSweep> RecordCubeSweeps(SweepRecorder& recorder, const RobotModel& model,
+                                               const LaserCalibrationPlan& plan,
+                                               const std::function<void(const std::string&)>& progress,
+                                               std::vector<SweepRecording>* raw = nullptr);
+
+/// Calibrates the arm laser's mount: records the plan's sweeps of the cube, then solves the mount
+/// (from the design mount model.T_tool0_arm_laser) together with the cube's and the ground's
+/// poses (from the plan's, known roughly) with eq. 6 inside eq. 7. The arm returns to q_start.
+/// The mount is summary.T_tool0_laser when summary.IsUsable().
+CalibrationSummary CalibrateArmLaser(hal::Robot& robot, const RobotModel& model, const arm::ArmOptions& arm_options,
+                                     const LaserCalibrationPlan& plan, const Vector6d& q_start,
+                                     const std::function<void(const std::string&)>& progress);
+
+}  // namespace ifab::sequencer
