@@ -6,13 +6,13 @@
 
 #include <fstream>
 #include <iostream>
-#include <sstream>
 
 #include "ifab/app/commands.h"
 #include "ifab/arm/ilqg.h"
 #include "ifab/core/angles.h"
 #include "ifab/core/data_path.h"
 #include "ifab/core/error.h"
+#include "ifab/core/parse.h"
 #include "ifab/model/robot_model.h"
 
 namespace ifab::app {
@@ -20,27 +20,9 @@ namespace {
 
 // Six numbers separated by spaces and/or commas.
 Vector6d ParseJoints(const std::string& text, const char* option, bool radians) {
-  std::string s = text;
-  for (char& ch : s)
-    if (ch == ',') ch = ' ';
-  std::istringstream in(s);
-  std::vector<double> v;
-  std::string token;
-  while (in >> token) {
-    std::size_t used = 0;
-    double x = 0.0;
-    try {
-      x = std::stod(token, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used != token.size() || !std::isfinite(x))
-      ThrowInputError("{}: expected 6 numbers, got '{}' ('{}' is not a number)", option, text, token);
-    v.push_back(x);
-  }
-  if (v.size() != 6) ThrowInputError("{}: expected 6 numbers, got {} in '{}'", option, v.size(), text);
+  const std::vector<double> v = ParseNumbers(text, option, 6);
   Vector6d q;
-  for (int i = 0; i < 6; ++i) q[i] = radians ? v[i] : DegToRad(v[i]);
+  for (int i = 0; i < 6; ++i) q[i] = radians ? v[static_cast<std::size_t>(i)] : DegToRad(v[static_cast<std::size_t>(i)]);
   return q;
 }
 

@@ -6,7 +6,6 @@
 
 #include <cmath>
 #include <iostream>
-#include <sstream>
 
 #include "ifab/app/commands.h"
 #include "ifab/base/planner/site_scene.h"
@@ -14,6 +13,7 @@
 #include "ifab/core/angles.h"
 #include "ifab/core/data_path.h"
 #include "ifab/core/error.h"
+#include "ifab/core/parse.h"
 #include "ifab/model/site.h"
 
 namespace ifab::app {
@@ -21,25 +21,7 @@ namespace {
 
 // "x y theta" (spaces and/or commas); x, y in m, theta in degrees unless radians.
 Pose2 ParsePose(const std::string& text, const char* option, bool radians) {
-  std::string s = text;
-  for (char& ch : s)
-    if (ch == ',') ch = ' ';
-  std::istringstream in(s);
-  std::vector<double> v;
-  std::string token;
-  while (in >> token) {
-    std::size_t used = 0;
-    double x = 0.0;
-    try {
-      x = std::stod(token, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used != token.size() || !std::isfinite(x))
-      ThrowInputError("{}: expected 3 numbers (x y theta), got '{}' ('{}' is not a number)", option, text, token);
-    v.push_back(x);
-  }
-  if (v.size() != 3) ThrowInputError("{}: expected 3 numbers (x y theta), got {} in '{}'", option, v.size(), text);
+  const std::vector<double> v = ParseNumbers(text, option, 3);
   return Pose2(v[0], v[1], WrapAngle(radians ? v[2] : DegToRad(v[2])));
 }
 
