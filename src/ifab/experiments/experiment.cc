@@ -4,6 +4,7 @@
 #include <oneapi/tbb/parallel_for.h>
 #include <oneapi/tbb/task_arena.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -34,7 +35,7 @@ void WriteJson(const fs::path& path, const nlohmann::json& j) {
   out << j.dump(2) << "\n";
 }
 
-// mean, std and worst (largest magnitude) of every numeric top-level key over runs.
+// mean, std, min, max and worst (largest magnitude: errors) of every numeric top-level key over runs.
 nlohmann::json Aggregate(const std::vector<nlohmann::json>& runs) {
   nlohmann::json agg = nlohmann::json::object();
   if (runs.empty()) return agg;
@@ -52,7 +53,11 @@ nlohmann::json Aggregate(const std::vector<nlohmann::json>& runs) {
     double var = 0;
     for (double x : v) var += (x - mean) * (x - mean);
     const double std = v.size() > 1 ? std::sqrt(var / static_cast<double>(v.size() - 1)) : 0.0;
-    agg[key] = {{"mean", mean}, {"std", std}, {"worst", worst}};
+    agg[key] = {{"mean", mean},
+                {"std", std},
+                {"min", *std::min_element(v.begin(), v.end())},
+                {"max", *std::max_element(v.begin(), v.end())},
+                {"worst", worst}};
   }
   return agg;
 }
