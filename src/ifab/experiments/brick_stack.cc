@@ -262,7 +262,15 @@ nlohmann::json Run(const RunContext& ctx) {
   r["wall_seconds"] = wall;
   r["arm_laser_mount"] = mount_info;
   r["failed"] = mission.stopped() || static_cast<int>(placed.size()) < plan.TotalBricks();
-  if (mission.stopped()) r["failure"] = mission.stop_reason();
+  if (mission.stopped()) {
+    r["failure"] = mission.stop_reason();
+    // Scoring only: did it stop safely? The arm at its park pose, the base standing still.
+    const Pose2 before = sim.true_base_pose();
+    sim.Wait(1.0);
+    r["stop"] = {{"arm_parked", (sim.true_joint_angles() - mission_options.q_park).cwiseAbs().maxCoeff() < DegToRad(1.0)},
+                 {"base_moved_m_in_1s", TranslationDistance(before, sim.true_base_pose())},
+                 {"holding_brick", sim.holding_brick()}};
+  }
   return r;
 }
 
