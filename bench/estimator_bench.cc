@@ -36,6 +36,7 @@ void BM_EstimatorUpdate(benchmark::State& state) {
   for (int k = 0; k < 16; ++k) {
     const Pose2 jitter(0.001 * (k % 3), -0.001 * (k % 2), 0.0002 * (k % 4));
     scans.push_back(testing::CastScan(world, T_world_base * jitter * T_base_laser, t, spec, &rng));
+    scans.back().time_increment = 0.025 * 0.75 / 1080.0;  // the UTM-30LX's beam times (deskewing)
   }
   int usable = 0, iterations = 0, n = 0;
   for (auto _ : state) {

@@ -37,7 +37,7 @@ class RecordingRobot final : public hal::Robot {
     sim_.Wait(dt);
     if (sim_.Now() >= next_) {
       truth.push_back({sim_.Now(), sim_.true_base_pose()});
-      next_ = sim_.Now() + 0.1;
+      next_ = sim_.Now() + truth_period;
     }
   }
   void CommandTracks(const TrackCommand& c) override { sim_.CommandTracks(c); }
@@ -51,6 +51,7 @@ class RecordingRobot final : public hal::Robot {
   std::vector<SyncPulse> TakeSyncPulses() override { return sim_.TakeSyncPulses(); }
 
   std::vector<Stamped<Pose2>> truth;
+  Seconds truth_period{0.1};  ///< [s] how often the true pose is recorded
 
  private:
   sim::SimRobot& sim_;
@@ -306,6 +307,7 @@ nlohmann::json RunManeuvers(const RunContext& ctx) {
   const Pose2 start = setup.plan.positions[static_cast<std::size_t>(setup.plan.visits.front().position)].T_site_base;
   sim::SimRobot sim(setup.sim_options, start, setup.q0, ctx.seed);
   RecordingRobot robot(sim);
+  robot.truth_period = setup.mission_options.control_period;  // every control step: for diagnosis
   sequencer::Mission mission(robot, setup.parts, setup.mission_options, ctx.seed);
   mission.on_progress = [&](const std::string& text) { ctx.Progress(text); };
   Pose2 true_start = sim.true_base_pose();
@@ -317,9 +319,15 @@ nlohmann::json RunManeuvers(const RunContext& ctx) {
   mission.Start(start, setup.q0);
   const auto logs = mission.Run(setup.plan);
 
-  Stats end_m, end_deg, drift_m, drift_deg;
+  Stats end_m, end_deg, drift_m, drift_deg, drift_deg_signed;
   std::ofstream csv(std::filesystem::path(ctx.out_dir) / "maneuvers.csv");
-  csv << "visit,position,end_error_m,end_error_deg,drift_m,drift_deg,reapproaches\n";
+  std::ofstream est_csv(std::filesystem::path(ctx.out_dir) / "trajectory_estimated.csv");
+  est_csv << "visit,t,x,y,theta\n";
+  // Signed drift (dx, dy in the estimated end frame; dtheta = true - estimated turn) beside the
+  // absolute values: a systematic error shows as one sign. The estimated trajectories and the
+  // truth (every control period) go beside them, for diagnosis.
+  csv << "visit,position,end_error_m,end_error_deg,drift_m,drift_deg,reapproaches,drift_x_m,drift_y_m,"
+         "drift_theta_deg,true_turn_deg,true_distance_m\n";
   int reapproaches = 0;
   for (std::size_t k = 0; k < logs.size(); ++k) {
     const auto& log = logs[k];
@@ -334,10 +342,18 @@ nlohmann::json RunManeuvers(const RunContext& ctx) {
     end_deg.Add(ed);
     drift_m.Add(dm);
     drift_deg.Add(dd);
+    drift_deg_signed.Add(RadToDeg(e.theta));
     reapproaches += log.reapproaches;
-    csv << fmt::format("{},{},{:.4f},{:.3f},{:.4f},{:.3f},{}\n", log.visit, log.position, em, ed, dm, dd,
-                       log.reapproaches);
+    csv << fmt::format("{},{},{:.4f},{:.3f},{:.4f},{:.3f},{},{:.4f},{:.4f},{:.3f},{:.2f},{:.3f}\n", log.visit,
+                       log.position, em, ed, dm, dd, log.reapproaches, e.x, e.y, RadToDeg(e.theta),
+                       RadToDeg(true_rel.theta), std::hypot(true_rel.x, true_rel.y));
+    for (const auto& s : log.estimated)
+      est_csv << fmt::format("{},{:.4f},{:.5f},{:.5f},{:.6f}\n", log.visit, s.t, s.value.x, s.value.y, s.value.theta);
   }
+  std::ofstream true_csv(std::filesystem::path(ctx.out_dir) / "trajectory_true.csv");
+  true_csv << "t,x,y,theta\n";
+  for (const auto& s : robot.truth)
+    true_csv << fmt::format("{:.4f},{:.5f},{:.5f},{:.6f}\n", s.t, s.value.x, s.value.y, s.value.theta);
   nlohmann::json r;
   r["maneuvers"] = end_m.n;
   r["end_error_vs_desired_m_mean"] = end_m.Mean();
@@ -346,6 +362,7 @@ nlohmann::json RunManeuvers(const RunContext& ctx) {
   r["drift_deg_mean"] = drift_deg.Mean();
   r["drift_m_max"] = drift_m.max;
   r["drift_deg_max"] = drift_deg.max;
+  r["drift_deg_signed_mean"] = drift_deg_signed.Mean();  // true - estimated turn: a bias shows here
   r["end_error_vs_desired_m_max"] = end_m.max;
   r["end_error_vs_desired_deg_max"] = end_deg.max;
   r["reapproaches"] = reapproaches;

@@ -37,6 +37,13 @@ ReferenceWeighting ParseWeighting(const ConfigNode& node) {
   node.Fail("'none' or 'arc_length'");
 }
 
+Thinning ParseThinning(const ConfigNode& node) {
+  const auto s = node.As<std::string>();
+  if (s == "nearest_beyond_spacing") return Thinning::kNearestBeyondSpacing;
+  if (s == "noise_independent") return Thinning::kNoiseIndependent;
+  node.Fail("'nearest_beyond_spacing' or 'noise_independent'");
+}
+
 MotionPrior ParseMotionPrior(const ConfigNode& node) {
   const auto s = node.As<std::string>();
   if (s == "none") return MotionPrior::kNone;
@@ -57,10 +64,12 @@ EstimatorOptions EstimatorOptions::FromConfig(const ConfigNode& node) {
                    "degeneracy_ratio", "max_rotation_jump_deg", "max_translation_jump",
                    "reseed_after_failures", "max_reference_gap_sigmas", "end_margin_sigmas",
                    "prior_weight", "reference_weighting", "interpolate_reference",
-                   "keyframe_capacity"});
+                   "keyframe_capacity", "thinning", "deskew"});
   node.ReadNonNegative("min_range", o.min_range);
   node.ReadPositive("max_range", o.max_range);
   node.ReadNonNegative("min_point_spacing", o.min_point_spacing);
+  if (auto c = node.Find("thinning")) o.thinning = ParseThinning(*c);
+  node.Read("deskew", o.deskew);
   node.ReadPositive("max_points", o.max_points);
   node.ReadPositive("max_beams", o.max_beams);
   node.ReadPositive("min_points", o.min_points);
@@ -403,15 +412,30 @@ struct BaseStateEstimator::Impl {
 
   // --- points ---------------------------------------------------------------------------------
 
-  void ExtractPoints(const LaserScan& scan) {
+  // Valid beam endpoints in the base frame. With a base twist (v_base [m/s] in the base frame,
+  // omega [rad/s]) each beam is moved from the base pose at its own time to the pose at the
+  // scan's middle time (constant twist over the sweep); a zero twist leaves the scan rigid.
+  void ExtractPoints(const LaserScan& scan, const Eigen::Vector2d& v_base = Eigen::Vector2d::Zero(),
+                     double omega = 0.0) {
     valid_base.clear();
     const double lo = std::max(o.min_range, scan.range_min);
     const double hi = std::min(o.max_range, scan.range_max);
+    const bool deskew = scan.time_increment > 0.0 && (omega != 0.0 || v_base.squaredNorm() > 0.0);
+    const double mid = 0.5 * static_cast<double>(scan.size() == 0 ? 0 : scan.size() - 1);
     for (std::size_t i = 0; i < scan.size(); ++i) {
       const double r = scan.ranges[i];
       if (!std::isfinite(r) || r < lo || r > hi) continue;
       const double a = scan.Angle(i);
-      valid_base.push_back(T_base_laser * Eigen::Vector2d(r * std::cos(a), r * std::sin(a)));
+      Eigen::Vector2d p = T_base_laser * Eigen::Vector2d(r * std::cos(a), r * std::sin(a));
+      if (deskew) {
+        // T_mid_i = exp(dt * twist); over a sweep (< 20 ms) the turn is < 0.01 rad, so the
+        // rotation to second order and the translation to first are exact to ~1e-6 m.
+        const double dt = (static_cast<double>(i) - mid) * scan.time_increment;
+        const double th = omega * dt;
+        const double c = 1.0 - 0.5 * th * th;
+        p = Eigen::Vector2d(c * p.x() - th * p.y(), th * p.x() + c * p.y()) + dt * v_base;
+      }
+      valid_base.push_back(p);
     }
     // Distance of each point to its nearer neighbour along the scan (sampling density).
     valid_gap.resize(valid_base.size());
@@ -447,10 +471,23 @@ struct BaseStateEstimator::Impl {
       }
     }
     const double s2 = spacing * spacing;
+    const bool independent = o.thinning == Thinning::kNoiseIndependent;
+    std::size_t prev = valid_base.size(), prev2 = valid_base.size();  // the last two candidates
     for (std::size_t i = 0; i < valid_base.size(); ++i) {
       const Eigen::Vector2d& p = valid_base[i];
       if (valid_gap[i] > max_gap) continue;
-      if (out->empty() || (p - out->back()).squaredNorm() >= s2) {
+      bool keep = out->empty();
+      if (!keep && !independent) {
+        keep = (p - out->back()).squaredNorm() >= s2;
+      } else if (!keep && prev < valid_base.size()) {
+        // Decide from the earlier points only: the previous candidate's distance from the last
+        // kept point plus one more step like the one before it reaches the spacing.
+        const double step = prev2 < valid_base.size() ? (valid_base[prev] - valid_base[prev2]).norm() : 0.0;
+        keep = (valid_base[prev] - out->back()).norm() + step >= spacing;
+      }
+      prev2 = prev;
+      prev = i;
+      if (keep) {
         out->push_back(p);
         if (near_end) near_end->push_back(std::min(chain_before[i], chain_after[i]) < end_margin);
       }
@@ -881,12 +918,28 @@ const BaseEstimate& BaseStateEstimator::AddScan(const LaserScan& scan,
   e = BaseEstimate{};
   e.t = t;
   const double dt = t - m.t_last;
-  m.ExtractPoints(scan);
 
   // Gyro rotation since the previous scan (eq. 2's sum of omega_i dt).
   double dtheta_gyro = 0.0;
   e.gyro_used = o.gyro_weight > 0.0 && m.IntegrateGyro(m.t_last, t, &dtheta_gyro);
   m.DropGyroUntil(t);
+
+  // The base's twist during the sweep (improvement, off for the paper's rigid scan): the turn
+  // rate from the gyro since the previous scan (else the hint's or the last estimate's), the
+  // velocity from the hint or the last estimate, in the base frame.
+  Eigen::Vector2d v_base = Eigen::Vector2d::Zero();
+  double omega = 0.0;
+  if (o.deskew && dt > 1e-6) {
+    if (motion_hint) {
+      v_base = motion_hint->translation() / dt;
+      omega = motion_hint->theta / dt;
+    } else if (m.have_velocity) {
+      v_base = m.pose.rotation().transpose() * m.velocity.head<2>();
+      omega = m.velocity.z();
+    }
+    if (e.gyro_used) omega = dtheta_gyro / dt;
+  }
+  m.ExtractPoints(scan, v_base, omega);
 
   // Prediction: gyro rotation (else the hint's or the last turn rate), translation from the
   // motion hint or the motion prior.

@@ -25,6 +25,9 @@
 /// (from Options::max_beams) and reused (a test counts allocations); adding a keyframe builds
 /// that keyframe's kd-tree (nanoflann's node pool allocates), once per keyframe.
 ///
+/// The paper treats each scan as rigid at its middle time; Options::deskew (an improvement, off by
+/// default) moves every beam to that time with the gyro rate and the last velocity instead.
+///
 /// Options marked "improvement" below are off by default (the paper's method as written); the
 /// configs in data/estimator/ say which they switch on and why. Three safeguards are on by
 /// default and can be set to 0 for eq. 1-3 literally: the reference-point filters
@@ -57,6 +60,25 @@ enum class ReferenceWeighting {
                ///< measurement points towards where the reference happens to be denser
 };
 
+/// How a scan's points are thinned to about min_point_spacing (reference_point_spacing) apart,
+/// walking along the scan.
+enum class Thinning {
+  /// Keep each point that lies at least the spacing from the last kept one. Under range noise
+  /// this keeps points whose noise carried them forward along the scan, and on a wall seen
+  /// obliquely that noise also moves them off the wall with a sign that flips at the foot of the
+  /// perpendicular: the kept points show the wall turned, by an amount that depends on the
+  /// spacing, so a scan matched against a reference thinned at another spacing (or seen from
+  /// another place) comes out turned too, by ~0.01 deg per match, always the same way. Chained
+  /// over keyframes that is a heading drift of ~0.5 deg per maneuver.
+  kNearestBeyondSpacing,
+  /// Keep a point when the previous one plus one more step reaches the spacing: whether a point
+  /// is kept depends only on the points before it, never on its own noise, so the kept points
+  /// are unbiased. (Their spacing still follows the noise; over raw reference points that leaves
+  /// ~0.002 deg per match, which interpolate_reference removes.) The paper does not say how it
+  /// thins; this is the default because the other one is biased.
+  kNoiseIndependent,
+};
+
 /// How the translation of the initial guess is predicted when no motion hint is given (the
 /// rotation comes from the gyro).
 enum class MotionPrior {
@@ -68,7 +90,14 @@ struct EstimatorOptions {
   // Scan preprocessing.
   double min_range{0.1};           ///< [m] beams shorter than this are dropped
   double max_range{29.0};          ///< [m] beams longer than this are dropped
-  double min_point_spacing{0.05};  ///< [m] consecutive kept points are at least this far apart
+  double min_point_spacing{0.05};  ///< [m] consecutive kept points are about this far apart
+  Thinning thinning{Thinning::kNoiseIndependent};  ///< how points are picked (both scan kinds)
+  /// Improvement: move each beam to the base pose at the scan's middle time with the twist of
+  /// the base (gyro rate, last velocity) and the beam times (LaserScan::time_increment), instead
+  /// of the paper's scan "rigid at the time of the middle point". While turning, a rigid scan is
+  /// stretched in angle by omega * sweep time / field of view, and the estimated turn with it
+  /// (~0.1 % of every turn, one sign per turning sense). No effect when time_increment is 0.
+  bool deskew{false};
   int max_points{400};             ///< measurement points kept per scan (evenly thinned beyond)
   int max_beams{1081};             ///< buffers are sized for scans of this many beams
   int min_points{40};              ///< fewer valid points than this: the scan is not matched
