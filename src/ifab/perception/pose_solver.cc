@@ -386,7 +386,7 @@ class Engine {
         return;
       }
       const double c = std::abs(chosen.n.dot(u));
-      if (chosen.range && c < std::cos(options_.max_incidence)) {
+      if (chosen.range && (c < std::cos(options_.max_incidence) || c > std::cos(options_.min_incidence))) {
         labels_[i] = PointLabel::kGrazing;
         matches_[i] = m;
         return;

@@ -21,7 +21,7 @@ Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
 
 RegistrationOptions RegistrationOptions::FromConfig(const ConfigNode& c) {
   c.ExpectKeys({"noise", "residual", "max_iterations", "max_solver_iterations", "translation_tolerance",
-                "rotation_tolerance", "shadow_points", "shadow_edge_distance", "shadow_distance", "shadow_sigmas", "max_distance", "max_incidence_deg",
+                "rotation_tolerance", "shadow_points", "shadow_edge_distance", "shadow_distance", "shadow_sigmas", "max_distance", "max_incidence_deg", "min_incidence_deg",
                 "loss", "loss_scale", "step_sigma_translation", "step_sigma_rotation", "restarts", "restart_distance", "prior_sigma_translation", "prior_sigma_rotation", "unconstrained_std",
                 "num_threads"});
   RegistrationOptions o;
@@ -46,6 +46,12 @@ RegistrationOptions RegistrationOptions::FromConfig(const ConfigNode& c) {
     c.ReadInRange("max_incidence_deg", deg, 0.0, 90.0);
     o.max_incidence = deg * M_PI / 180.0;
   }
+  if (c.Has("min_incidence_deg")) {
+    double deg = 0.0;
+    c.ReadInRange("min_incidence_deg", deg, 0.0, 90.0);
+    o.min_incidence = deg * M_PI / 180.0;
+  }
+  if (o.min_incidence >= o.max_incidence) c["min_incidence_deg"].Fail("an angle below max_incidence_deg");
   if (auto l = c.Find("loss")) {
     const auto v = l->As<std::string>();
     if (v == "none") o.loss = RobustLoss::kNone;

@@ -7,6 +7,7 @@
 /// and Table II experiments; the robot is reached only through hal::Robot.
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,9 +24,22 @@ class ConfigNode;
 
 namespace ifab::sequencer {
 
-/// One sweep: joint `joint` (0-based) from `from` to `to` about the aimed scan pose, the other
-/// joints at the scan pose plus `pose_offset` (e.g. joint 6 turned 90 deg so the scan plane
-/// crosses a joint-1 sweep).
+/// Where the laser looks from, relative to the look point (the target plus the sweep's aim
+/// offset): the scan pose is then found by IK instead of by aiming a posture.
+struct LaserView {
+  double distance{1.2};   ///< [m] laser origin to the look point
+  double elevation{0.8};  ///< [rad] the centre beam's angle below horizontal
+  double azimuth{0.0};    ///< [rad] the laser's bearing from the look point, from the side of the
+                          ///< arm's foot (0: between the foot and the target, looking away from it)
+  double roll{0.0};       ///< [rad] scan plane about the centre beam (0: it holds the horizontal
+                          ///< perpendicular to the view; 90 deg: it holds the vertical)
+  double height{0.0};     ///< [m] height of the look point above the floor (base z = 0)
+};
+
+/// One sweep: joint `joint` (0-based) from `from` to `to` about the scan pose, the other joints
+/// at the scan pose plus `pose_offset` (e.g. joint 6 turned 90 deg so the scan plane crosses a
+/// joint-1 sweep). The scan pose is the posture aimed at the target (AimAt), or, with `view`,
+/// the IK solution that puts the laser there.
 struct SweepSpec {
   int joint{4};                    ///< swept joint, 0-based
   double from{0.0};                ///< [rad] start, relative to the aimed scan pose
@@ -37,17 +51,24 @@ struct SweepSpec {
   /// (joint 6 at 0) aimed at a lateral offset crosses the target mid-sweep when joints 2, 3 or 5
   /// sweep.
   Eigen::Vector2d aim_offset{Eigen::Vector2d::Zero()};
+  std::optional<LaserView> view;   ///< set: the scan pose by IK from this view
 };
 
 /// Reads a YAML list of sweeps, each
-/// `{joint: 1..6, range_deg: [from, to], speed_deg_s, offset_deg: [6 numbers], aim_offset: [radial, lateral]}`
-/// (speed, offset and aim offset optional). Throws InputError naming the entry and field.
+/// `{joint: 1..6, range_deg: [from, to], speed_deg_s, offset_deg: [6 numbers], aim_offset: [radial, lateral],
+///   view: {distance, elevation_deg, azimuth_deg, roll_deg, height}}`
+/// (all but joint and range_deg optional). Throws InputError naming the entry and field.
 std::vector<SweepSpec> ReadSweepSpecs(const ConfigNode& list);
 
 /// A scan pose whose laser centre beam meets the floor (z = 0 of base) at `target_in_base`:
 /// joint 1 turns towards it, joint 5 tilts the laser until the beam lands at its distance
 /// (design model). The other joints are the posture's.
 Vector6d AimAt(const RobotModel& robot, const Eigen::Vector2d& target_in_base, const Vector6d& posture);
+
+/// The arm configuration (IK, nearest to q_near) that puts the laser at `view` of the look point
+/// (base frame, on the floor), with the design mount; nullopt if out of reach.
+std::optional<Vector6d> ViewPose(arm::IkSolver& ik, const RobotModel& robot, const Eigen::Vector2d& look_in_base,
+                                 const LaserView& view, const Vector6d& q_near);
 
 struct SweepRecorderOptions {
   double settle_time{0.3};  ///< [s] standstill at the sweep's start pose before sweeping
@@ -106,10 +127,15 @@ struct LaserCalibrationPlan {
   std::vector<SweepSpec> sweeps;                 ///< the paper: 6-8 sweeps of different joints
   Vector6d scan_posture{Vector6d::Zero()};       ///< [rad] posture before aiming (joints 1 and 5 aimed)
   int beam_stride{1};                            ///< keep every n-th beam of the scans
+  double min_range{0.0};                         ///< [m] drop shorter ranges (the UTM-30LX's short-range bias)
+  double crop_radius{0.0};                       ///< [m] keep points this close to the cube horizontally
+                                                 ///< (design mount; 0 = all): the model of a cube on a
+                                                 ///< flat floor holds only near it
   CalibrationOptions calibration;                ///< the solver's options
 
   /// Reads `{cube_in_base: [x, y, yaw_deg], cube_size, sweeps: [...], scan_posture_deg: [6],
-  /// beam_stride, calibration: {...}}`; `cube_in_base` and `sweeps` are required.
+  /// beam_stride, min_range, crop_radius, calibration: {...}}`; `cube_in_base` and `sweeps` are
+  /// required.
   static LaserCalibrationPlan FromConfig(const ConfigNode& config);
 
   /// The cube's pose in base as planned (standing on z = 0).
