@@ -49,6 +49,9 @@ struct RegistrationOptions {
   LaserNoiseModel noise;                                       ///< point covariance (Sec. V-B)
   RegistrationResidual residual{RegistrationResidual::kRay};  ///< error per point (kClosest: the paper)
   int max_iterations{30};              ///< correspondence steps (match, then solve)
+  int coarse_stride{1};                ///< the first steps use every n-th matched point, until a
+                                       ///< step moves less than 10x the tolerances; then all
+                                       ///< (speed-up for far guesses; 1 = off, the paper)
   int max_solver_iterations{25};       ///< Ceres iterations per step
   double translation_tolerance{1e-5};  ///< [m] converged when no body moves more in a step
   double rotation_tolerance{5e-5};     ///< [rad] ... and none turns more

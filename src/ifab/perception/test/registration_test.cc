@@ -86,6 +86,21 @@ INSTANTIATE_TEST_SUITE_P(Both, RegistrationResiduals,
                          ::testing::Values(RegistrationResidual::kClosest, RegistrationResidual::kRay),
                          [](const auto& p) { return p.param == RegistrationResidual::kClosest ? "closest" : "ray"; });
 
+// Coarse steps on every n-th point first, then all points: the same minimum.
+TEST(Registration, CoarseStepsEndAtTheSameMinimum) {
+  const auto cloud = BrickCloud(1);
+  RegistrationOptions options;
+  const RegistrationSummary fine = Register(cloud, BrickOnGround(kGuessBrick), options);
+  options.coarse_stride = 8;
+  const RegistrationSummary coarse = Register(cloud, BrickOnGround(kGuessBrick), options);
+  ASSERT_EQ(fine.status, RegistrationStatus::kConverged) << fine.BriefReport() << "\n" << coarse.BriefReport();
+  ASSERT_EQ(coarse.status, RegistrationStatus::kConverged) << coarse.BriefReport();
+  const PoseError e = Error(coarse.Find("brick")->T_base_body, fine.Find("brick")->T_base_body);
+  EXPECT_LT(e.translation, 2e-5);
+  EXPECT_LT(e.rotation, 1e-4);
+  EXPECT_NEAR(coarse.num_inliers, fine.num_inliers, 20);  // a few edge points may flip
+}
+
 // The paper's Fig. 4: a block on the ground seen across its edges returns mixed pixels between
 // the block and the floor behind it. The shadow rule removes them.
 TEST(Registration, RemovesShadowPointsAtTheEdgesOfABlockOnTheGround) {
