@@ -250,9 +250,10 @@ std::vector<CalibrationSweep> RecordCubeSweeps(SweepRecorder& recorder, const Ro
 
 CalibrationSummary CalibrateArmLaser(hal::Robot& robot, const RobotModel& model, const arm::ArmOptions& arm_options,
                                      const LaserCalibrationPlan& plan, const Vector6d& q_start,
-                                     const std::function<void(const std::string&)>& progress) {
+                                     const std::function<void(const std::string&)>& progress,
+                                     const SweepRecorderOptions& recorder_options) {
   arm::ArmPrimitives arm(model, arm_options);
-  SweepRecorder recorder(robot, arm, q_start);
+  SweepRecorder recorder(robot, arm, q_start, recorder_options);
   std::vector<CalibrationSweep> sweeps;
   try {
     sweeps = RecordCubeSweeps(recorder, model, plan, progress);

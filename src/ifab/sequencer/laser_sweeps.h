@@ -125,7 +125,8 @@ struct LaserCalibrationPlan {
   Eigen::Vector3d cube_in_base{1.70, 0.0, 0.0};  ///< cube centre x, y [m] and yaw [rad] in base, roughly known
   double cube_size{0.25};                        ///< [m] edge length (the paper: about 0.25 m)
   std::vector<SweepSpec> sweeps;                 ///< the paper: 6-8 sweeps of different joints
-  Vector6d scan_posture{Vector6d::Zero()};       ///< [rad] posture before aiming (joints 1 and 5 aimed)
+  Vector6d scan_posture{Vector6d::Zero()};       ///< [rad] posture aimed by sweeps without a view
+                                                 ///< (joints 1 and 5), and the IK seed of views
   int beam_stride{1};                            ///< keep every n-th beam of the scans
   double min_range{0.0};                         ///< [m] drop shorter ranges (the UTM-30LX's short-range bias)
   double crop_radius{0.0};                       ///< [m] keep points this close to the cube horizontally
@@ -143,7 +144,8 @@ struct LaserCalibrationPlan {
 };
 
 /// Records the plan's sweeps of the cube with `recorder` (every other sweep reversed), assembled
-/// with eq. 6 but not yet through the mount. `raw` (if given) receives the recordings.
+/// with eq. 6 but not yet through the mount, ranges below min_range dropped and the points cropped
+/// to crop_radius about the cube. `raw` (if given) receives the recordings.
 std::vector<CalibrationSweep> RecordCubeSweeps(SweepRecorder& recorder, const RobotModel& model,
                                                const LaserCalibrationPlan& plan,
                                                const std::function<void(const std::string&)>& progress,
@@ -152,9 +154,12 @@ std::vector<CalibrationSweep> RecordCubeSweeps(SweepRecorder& recorder, const Ro
 /// Calibrates the arm laser's mount: records the plan's sweeps of the cube, then solves the mount
 /// (from the design mount model.T_tool0_arm_laser) together with the cube's and the ground's
 /// poses (from the plan's, known roughly) with eq. 6 inside eq. 7. The arm returns to q_start.
-/// The mount is summary.T_tool0_laser when summary.IsUsable().
+/// The mount is summary.T_tool0_laser when summary.IsUsable(); a sweep that cannot be planned or
+/// run gives status kNoPoints and its reason in the message. The arm laser is left as
+/// recorder_options.laser_on_between_sweeps says (default on).
 CalibrationSummary CalibrateArmLaser(hal::Robot& robot, const RobotModel& model, const arm::ArmOptions& arm_options,
                                      const LaserCalibrationPlan& plan, const Vector6d& q_start,
-                                     const std::function<void(const std::string&)>& progress);
+                                     const std::function<void(const std::string&)>& progress,
+                                     const SweepRecorderOptions& recorder_options = {});
 
 }  // namespace ifab::sequencer
