@@ -1,6 +1,7 @@
 // Registration of one sweep of the brick stack on the floor, ~20k points synthesised by ray
-// casting (perception/testing/synthetic.h), from a guess 2 cm and 2 deg off; counters give the
-// final error of the workpiece pose. And one extrinsic calibration from six sweeps of a cube.
+// casting (perception_scene.h), from a guess 2 cm and 2 deg off; counters give the final error
+// of the workpiece pose (perception_open3d_bench: the same with Open3D, where installed). And one
+// extrinsic calibration from six sweeps of a cube.
 #include <benchmark/benchmark.h>
 
 #include "ifab/core/random.h"
@@ -8,53 +9,17 @@
 #include "ifab/perception/registration.h"
 #include "ifab/perception/scan_assembly.h"
 #include "ifab/perception/testing/synthetic.h"
+#include "perception_scene.h"
 
 namespace ifab {
 namespace {
 
-struct StackScene {
-  std::vector<RegistrationBody> truth;
-  std::vector<RayPoint> cloud;
-};
-
-// Ten bricks stacked at the site origin, the floor, and a sweep of the arm laser from 1.4 m.
-const StackScene& Scene20k() {
-  static const StackScene scene = [] {
-    StackScene s;
-    RigidObject ground{"ground", Pose3::Identity(), {Plane{Eigen::Vector3d::UnitZ(), 0.0}}};
-    RegistrationBody stack{"stack", Pose3::Identity(), {}, true};
-    for (int k = 0; k < 10; ++k)
-      stack.parts.push_back({"brick", PoseFromXyzRpy(0.0, 0.0, 0.026 + 0.052 * k, 0, 0, 0.002 * k),
-                             {Box{Eigen::Vector3d(0.240, 0.115, 0.052)}}});
-    // The stack seen from the robot: 1.3 m ahead, 0.6 m to the left, turned 30 deg.
-    const Pose3 T_base_site = PoseFromXyzRpy(1.3, 0.6, 0.0, 0.0, 0.0, 0.5);
-    s.truth = {{"ground", T_base_site, {ground}, true}, stack};
-    s.truth[1].T_base_body = T_base_site;
-    const Scene world(s.truth);
-    testing::SyntheticLaser laser;
-    RandomStream rng(1);
-    auto laser_at = [](double t) {
-      Pose3 T = Pose3::Identity();
-      T.translation() = Eigen::Vector3d(0.4, 0.0, 1.1);
-      T.linear() = RotationFromRpy(M_PI / 2, 0.0, 0.35 + 0.25 * t);
-      return T;
-    };
-    // 0.5 rad of sweep across the stack in 2 s; keep every other point: about 20k.
-    s.cloud = testing::SynthesizeCloud(world, laser_at, 0.0, 2.0, laser, rng);
-    std::vector<RayPoint> kept;
-    for (std::size_t i = 0; i < s.cloud.size(); i += 2) kept.push_back(s.cloud[i]);
-    s.cloud = kept;
-    return s;
-  }();
-  return scene;
-}
-
 void BM_RegisterStackSweep(benchmark::State& state) {
-  const StackScene& s = Scene20k();
+  const bench::StackScene& s = bench::Scene20k();
   RegistrationOptions options;
   options.residual = state.range(0) == 0 ? RegistrationResidual::kClosest : RegistrationResidual::kRay;
   auto guess = s.truth;
-  for (auto& b : guess) b.T_base_body = b.T_base_body * PoseFromXyzRpy(0.015, -0.012, 0.005, 0.01, -0.01, 0.03);
+  for (auto& b : guess) b.T_base_body = b.T_base_body * bench::GuessOffset();
   RegistrationSummary summary;
   for (auto _ : state) {
     summary = Register(s.cloud, guess, options);

@@ -56,6 +56,8 @@ Setup ReadSetup(const ConfigNode& c) {
     const bool bias = b->As<bool>();
     s.sim.arm_laser.bias_enabled = bias;
   }
+  // Diagnostics only: the arm laser without any noise (then only model errors are left).
+  if (auto n = c.Find("laser_noise")) s.sim.arm_laser.noise_enabled = n->As<bool>();
   s.robot = LoadRobotModel(s.sim.urdf);
   s.arm = arm::ArmOptions::Load(Relative(c, "arm"));
   const auto p = c["scan_posture_deg"].AsNumbers(6);
@@ -128,12 +130,14 @@ json RunRegistrationConsistency(const RunContext& ctx) {
   const ConfigNode& c = *ctx.config;
   c.ExpectKeys({"seed", "robot_yaml", "arm", "range_bias", "scan_posture_deg", "beam_stride", "brick_in_base",
                 "brick_placement_sigma", "guess_error", "sweeps", "passes", "mount", "calibration", "bodies",
-                "registration", "save_sweeps"});
+                "registration", "save_sweeps", "laser_noise", "crop_radius", "min_range"});
   const bool save_sweeps = c.Get<bool>("save_sweeps", false);
   const Setup setup = ReadSetup(c);
   const std::vector<sequencer::SweepSpec> sweeps = sequencer::ReadSweepSpecs(c["sweeps"]);
   int passes = 2;
   c.ReadPositive("passes", passes);
+  double crop_radius = 0.0;
+  c.ReadNonNegative("crop_radius", crop_radius);
   const auto bb = c["brick_in_base"].AsNumbers(3);  // x y [m], yaw [deg]
   const auto place_sigma = c["brick_placement_sigma"].AsNumbers(2);  // [m], [deg]
   const auto guess_error = c["guess_error"].AsNumbers(2);            // [m], [deg]
@@ -189,6 +193,7 @@ json RunRegistrationConsistency(const RunContext& ctx) {
   sequencer::SweepRecorder recorder(sim, arm, setup.posture);
   ScanAssemblyOptions assembly;
   assembly.beam_stride = setup.beam_stride;
+  c.ReadNonNegative("min_range", assembly.min_range);
 
   std::vector<std::array<double, 6>> poses;
   json scans = json::array();
@@ -200,7 +205,11 @@ json RunRegistrationConsistency(const RunContext& ctx) {
       ctx.Progress(name);
       const SweepRecording rec = recorder.Record(Eigen::Vector2d(bb[0], bb[1]), setup.posture, sweeps[k], pass % 2 == 1, name);
       if (save_sweeps) SaveSweep((fs::path(ctx.out_dir) / fmt::format("scan_{}_sweep.json", scans.size() + 1)).string(), rec);
-      const std::vector<RayPoint> cloud = AssembleCloud(rec.scans, rec.joint_states, setup.robot, T_tool0_laser, assembly);
+      std::vector<RayPoint> cloud = AssembleCloud(rec.scans, rec.joint_states, setup.robot, T_tool0_laser, assembly);
+      // The model (a brick on a flat floor) holds near the brick only: keep the points within
+      // crop_radius of its design spot (horizontally), as the mission does.
+      if (crop_radius > 0.0)
+        std::erase_if(cloud, [&](const RayPoint& p) { return (p.p.head<2>() - Eigen::Vector2d(bb[0], bb[1])).norm() > crop_radius; });
       // The expected brick pose: its design spot, the robot's localization off by guess_error.
       const Pose3 guess = T_base_brick_design * PoseFromXyzRpy(rng.Uniform(-guess_error[0], guess_error[0]),
                                                                rng.Uniform(-guess_error[0], guess_error[0]), 0, 0, 0,
@@ -218,8 +227,15 @@ json RunRegistrationConsistency(const RunContext& ctx) {
       const auto v = XyzRpyFromPose(found->T_base_body);
       const std::array<double, 6> pose{1e3 * v[0], 1e3 * v[1], 1e3 * v[2], RadToDeg(v[3]), RadToDeg(v[4]), RadToDeg(v[5])};
       if (s.IsUsable()) poses.push_back(pose);
+      std::array<double, 6> predicted{};  // the solver's own std (base axes; rotations about them)
+      for (int i = 0; i < 6; ++i) {
+        const double sd = std::sqrt(found->covariance(i, i));
+        predicted[static_cast<std::size_t>(i)] = i < 3 ? 1e3 * sd : RadToDeg(sd);
+      }
       scans.push_back({{"name", name}, {"points", s.num_points}, {"brick_inliers", found->inliers},
-                       {"status", ToString(s.status)}, {"pose_mm_deg", pose}, {"warnings", s.warnings}});
+                       {"status", ToString(s.status)}, {"message", s.message}, {"pose_mm_deg", pose},
+                       {"predicted_std_mm_deg", predicted}, {"rms_whitened", s.rms_whitened},
+                       {"shadow_removed", s.num_shadow_removed}, {"warnings", s.warnings}});
       csv << fmt::format("{},{},{},{},{:.6f},{:.6f},{:.6f},{:.4f},{:.4f},{:.4f},{}\n", poses.size(), sweeps[k].joint + 1,
                          s.num_points, found->inliers, v[0], v[1], v[2], pose[3], pose[4], pose[5], ToString(s.status));
       if (k == 0 && pass == 0) {  // one labelled cloud for the report (paper Fig. 3)
@@ -275,7 +291,7 @@ json RunCalibrationConsistency(const RunContext& ctx) {
   const ConfigNode& c = *ctx.config;
   c.ExpectKeys({"seed", "robot_yaml", "arm", "range_bias", "scan_posture_deg", "beam_stride", "cube_size",
                 "cube_placement_sigma", "datasets", "sweeps", "trials", "initial_guess", "calibration", "jobs",
-                "save_sweeps"});
+                "save_sweeps", "laser_noise", "min_range", "crop_radius"});
   const bool save_sweeps = c.Get<bool>("save_sweeps", false);
   const Setup setup = ReadSetup(c);
   sequencer::LaserCalibrationPlan plan;
@@ -283,6 +299,8 @@ json RunCalibrationConsistency(const RunContext& ctx) {
   plan.scan_posture = setup.posture;
   plan.beam_stride = setup.beam_stride;
   c.ReadPositive("cube_size", plan.cube_size);
+  c.ReadNonNegative("min_range", plan.min_range);
+  c.ReadNonNegative("crop_radius", plan.crop_radius);
   const double size = plan.cube_size;
   const auto place_sigma = c["cube_placement_sigma"].AsNumbers(2);
   const auto guess = c["initial_guess"].AsNumbers(2);  // +- [m], +- [deg]
@@ -355,9 +373,20 @@ json RunCalibrationConsistency(const RunContext& ctx) {
     worst_trial_std_deg = std::max(worst_trial_std_deg, std_deg);
     int points = 0;
     for (const auto& s : recorded) points += static_cast<int>(s.points.size());
+    // What the solver expects of its own scatter (from J^T J; rotations about tool0 axes), to
+    // compare with the scatter over data sets: far smaller means model errors dominate.
+    const CalibrationSummary& first = results.front();
+    std::array<double, 6> predicted{}, error{};
+    for (std::size_t k = 0; k < 6; ++k) {
+      const double sd = std::sqrt(first.covariance(static_cast<int>(k), static_cast<int>(k)));
+      predicted[k] = k < 3 ? 1e3 * sd : RadToDeg(sd);
+      error[k] = delta[k] - MountDelta(design, truth_mount)[k];
+    }
     sets.push_back({{"cube_in_base", cb}, {"points", points}, {"usable_trials", mounts.size()},
-                    {"mount_mm_deg", delta}, {"trial_std_mm_max", std_mm}, {"trial_std_deg_max", std_deg},
-                    {"warnings", results.front().warnings}});
+                    {"mount_mm_deg", delta}, {"error_vs_truth_mm_deg", error}, {"predicted_std_mm_deg", predicted},
+                    {"trial_std_mm_max", std_mm}, {"trial_std_deg_max", std_deg}, {"inliers", first.num_inliers},
+                    {"shadow_removed", first.num_shadow_removed}, {"rms_whitened", first.rms_whitened},
+                    {"sweep_inliers", first.sweep_inliers}, {"warnings", first.warnings}});
     csv << fmt::format("{},{},{},{},{:.3f},{:.3f},{:.3f},{:.4f},{:.4f},{:.4f},{:.4f},{:.5f}\n", d + 1, cb[0], cb[1], points,
                        delta[0], delta[1], delta[2], delta[3], delta[4], delta[5], std_mm, std_deg);
   }

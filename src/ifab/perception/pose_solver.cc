@@ -210,6 +210,7 @@ class Engine {
 
     s.status = RegistrationStatus::kMaxIterations;
     s.message = fmt::format("not converged in {} correspondence steps", options_.max_iterations);
+    stride_ = std::max(1, options_.coarse_stride);
     for (int it = 0; it < options_.max_iterations && any_free; ++it) {
       Match();
       if (CountInliers() == 0) {
@@ -223,6 +224,19 @@ class Engine {
         s.status = RegistrationStatus::kSolverFailed;
         s.message = step.message;
         break;
+      }
+      if (stride_ > 1) {
+        // Coarse phase (every stride-th point): once its steps are small, or cycle, go on with
+        // all points; only those steps may end the iteration.
+        if ((step.max_translation < 10.0 * options_.translation_tolerance &&
+             step.max_rotation < 10.0 * options_.rotation_tolerance) ||
+            CyclePeriod() > 0) {
+          stride_ = 1;
+          history_.clear();
+          previous_delta_.resize(0);
+          relaxation_ = 1.0;
+        }
+        continue;
       }
       if (step.max_translation < options_.translation_tolerance && step.max_rotation < options_.rotation_tolerance) {
         s.status = RegistrationStatus::kConverged;
@@ -261,6 +275,7 @@ class Engine {
   double cycle_translation_{0.0}, cycle_rotation_{0.0};
   Eigen::VectorXd previous_delta_;
   double relaxation_{1.0};
+  int stride_{1};  // points used by the correspondence steps (coarse_stride, then 1)
 
   int CyclePeriod() {
     std::vector<Pose3> now = poses_;
@@ -386,7 +401,7 @@ class Engine {
         return;
       }
       const double c = std::abs(chosen.n.dot(u));
-      if (chosen.range && c < std::cos(options_.max_incidence)) {
+      if (chosen.range && (c < std::cos(options_.max_incidence) || c > std::cos(options_.min_incidence))) {
         labels_[i] = PointLabel::kGrazing;
         matches_[i] = m;
         return;
@@ -444,7 +459,8 @@ class Engine {
     int num_residuals{0};
   };
 
-  Built Build(bool with_priors) {
+  // stride: every stride-th informative point (coarse steps); the information uses all.
+  Built Build(bool with_priors, int stride = 1) {
     Built b;
     ceres::Problem::Options po;
     po.cost_function_ownership = ceres::TAKE_OWNERSHIP;
@@ -460,7 +476,7 @@ class Engine {
 
     // Group the informative points by body, in chunks.
     std::vector<std::vector<std::size_t>> by_body(poses_.size());
-    for (std::size_t i = 0; i < matches_.size(); ++i)
+    for (std::size_t i = 0; i < matches_.size(); i += static_cast<std::size_t>(stride))
       if (labels_[i] == PointLabel::kInlier) by_body[static_cast<std::size_t>(matches_[i].body)].push_back(i);
 
     for (std::size_t k = 0; k < poses_.size(); ++k) {
@@ -514,7 +530,7 @@ class Engine {
 
   StepResult Step() {
     StepResult r;
-    Built b = Build(/*with_priors=*/true);
+    Built b = Build(/*with_priors=*/true, stride_);
     ceres::Solver::Options so;
     so.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
     so.max_num_iterations = options_.max_solver_iterations;

@@ -20,8 +20,8 @@ Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
 }  // namespace
 
 RegistrationOptions RegistrationOptions::FromConfig(const ConfigNode& c) {
-  c.ExpectKeys({"noise", "residual", "max_iterations", "max_solver_iterations", "translation_tolerance",
-                "rotation_tolerance", "shadow_points", "shadow_edge_distance", "shadow_distance", "shadow_sigmas", "max_distance", "max_incidence_deg",
+  c.ExpectKeys({"noise", "residual", "max_iterations", "coarse_stride", "max_solver_iterations", "translation_tolerance",
+                "rotation_tolerance", "shadow_points", "shadow_edge_distance", "shadow_distance", "shadow_sigmas", "max_distance", "max_incidence_deg", "min_incidence_deg",
                 "loss", "loss_scale", "step_sigma_translation", "step_sigma_rotation", "restarts", "restart_distance", "prior_sigma_translation", "prior_sigma_rotation", "unconstrained_std",
                 "num_threads"});
   RegistrationOptions o;
@@ -33,6 +33,7 @@ RegistrationOptions RegistrationOptions::FromConfig(const ConfigNode& c) {
     else r->Fail("one of: closest (eq. 7, the paper), ray (range to the face the ray hits)");
   }
   c.ReadPositive("max_iterations", o.max_iterations);
+  c.ReadPositive("coarse_stride", o.coarse_stride);
   c.ReadPositive("max_solver_iterations", o.max_solver_iterations);
   c.ReadPositive("translation_tolerance", o.translation_tolerance);
   c.ReadPositive("rotation_tolerance", o.rotation_tolerance);
@@ -46,6 +47,12 @@ RegistrationOptions RegistrationOptions::FromConfig(const ConfigNode& c) {
     c.ReadInRange("max_incidence_deg", deg, 0.0, 90.0);
     o.max_incidence = deg * M_PI / 180.0;
   }
+  if (c.Has("min_incidence_deg")) {
+    double deg = 0.0;
+    c.ReadInRange("min_incidence_deg", deg, 0.0, 90.0);
+    o.min_incidence = deg * M_PI / 180.0;
+  }
+  if (o.min_incidence >= o.max_incidence) c["min_incidence_deg"].Fail("an angle below max_incidence_deg");
   if (auto l = c.Find("loss")) {
     const auto v = l->As<std::string>();
     if (v == "none") o.loss = RobustLoss::kNone;

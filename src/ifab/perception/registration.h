@@ -49,6 +49,9 @@ struct RegistrationOptions {
   LaserNoiseModel noise;                                       ///< point covariance (Sec. V-B)
   RegistrationResidual residual{RegistrationResidual::kRay};  ///< error per point (kClosest: the paper)
   int max_iterations{30};              ///< correspondence steps (match, then solve)
+  int coarse_stride{1};                ///< the first steps use every n-th matched point, until a
+                                       ///< step moves less than 10x the tolerances; then all
+                                       ///< (speed-up for far guesses; 1 = off, the paper)
   int max_solver_iterations{25};       ///< Ceres iterations per step
   double translation_tolerance{1e-5};  ///< [m] converged when no body moves more in a step
   double rotation_tolerance{5e-5};     ///< [rad] ... and none turns more
@@ -64,6 +67,10 @@ struct RegistrationOptions {
                                        ///< 0 = keep all (the paper)
   double max_incidence{M_PI / 2};      ///< [rad] kRay: points whose ray meets the face
                                        ///< more obliquely get zero error (range unreliable)
+  double min_incidence{0.0};           ///< [rad] kRay: points whose ray meets the face closer to
+                                       ///< its normal get zero error (improvement, 0 = off: the
+                                       ///< UTM-30LX reads strong near-normal returns short, the
+                                       ///< paper's Fig. 7 bump directly below the scanner)
   RobustLoss loss{RobustLoss::kCauchy};  ///< robust re-weighting (improvement; the paper: none)
   double loss_scale{3.0};              ///< [whitened units] where the robust loss bends
   double step_sigma_translation{0.01}; ///< [m] damping of each correspondence step (a prior on the
@@ -92,7 +99,8 @@ enum class PointLabel : std::uint8_t {
   kShadow = 1,   ///< flagged shadow point beyond shadow_distance: zero error
   kOutlier = 2,  ///< farther than max_distance from every primitive: zero error
   kFixed = 3,    ///< matched to a body held fixed: no parameter to inform
-  kGrazing = 4,  ///< its ray meets the face hit beyond max_incidence: zero error (kRay only)
+  kGrazing = 4,  ///< its ray meets the face hit beyond max_incidence or within min_incidence:
+                 ///< zero error (kRay only)
 };
 
 enum class RegistrationStatus { kConverged, kMaxIterations, kNoPoints, kSolverFailed };

@@ -18,7 +18,7 @@ std::vector<SweepSpec> ReadSweepSpecs(const ConfigNode& list) {
   for (std::size_t i = 0; i < list.size(); ++i) {
     const ConfigNode s = list[i];
     s.ExpectMap();
-    s.ExpectKeys({"joint", "range_deg", "speed_deg_s", "offset_deg", "aim_offset"});
+    s.ExpectKeys({"joint", "range_deg", "speed_deg_s", "offset_deg", "aim_offset", "view"});
     SweepSpec spec;
     const int joint = s.Get<int>("joint");
     if (joint < 1 || joint > 6) s["joint"].Fail("a joint number 1..6");
@@ -38,9 +38,46 @@ std::vector<SweepSpec> ReadSweepSpecs(const ConfigNode& list) {
       const auto v = o->AsNumbers(6);
       for (int k = 0; k < 6; ++k) spec.pose_offset[k] = DegToRad(v[static_cast<std::size_t>(k)]);
     }
+    if (auto v = s.Find("view")) {
+      v->ExpectMap();
+      v->ExpectKeys({"distance", "elevation_deg", "azimuth_deg", "roll_deg", "height"});
+      LaserView view;
+      v->ReadPositive("distance", view.distance);
+      double elevation = RadToDeg(view.elevation), azimuth = 0.0, roll = 0.0;
+      v->ReadInRange("elevation_deg", elevation, 5.0, 90.0);
+      v->Read("azimuth_deg", azimuth);
+      v->Read("roll_deg", roll);
+      v->Read("height", view.height);
+      view.elevation = DegToRad(elevation);
+      view.azimuth = DegToRad(azimuth);
+      view.roll = DegToRad(roll);
+      spec.view = view;
+    }
     out.push_back(spec);
   }
   return out;
+}
+
+std::optional<Vector6d> ViewPose(arm::IkSolver& ik, const RobotModel& robot, const Eigen::Vector2d& look_in_base,
+                                 const LaserView& view, const Vector6d& q_near) {
+  const Eigen::Vector2d foot = robot.T_base_arm_base.translation().head<2>();
+  const double bearing = std::atan2(look_in_base.y() - foot.y(), look_in_base.x() - foot.x()) + M_PI + view.azimuth;
+  const Eigen::Vector3d look(look_in_base.x(), look_in_base.y(), view.height);
+  const Eigen::Vector3d out(std::cos(view.elevation) * std::cos(bearing), std::cos(view.elevation) * std::sin(bearing),
+                            std::sin(view.elevation));
+  Pose3 T_base_laser = Pose3::Identity();
+  const Eigen::Vector3d x = -out;  // the centre beam
+  const Eigen::Vector3d y0 = Eigen::Vector3d::UnitZ().cross(x).normalized();
+  const Eigen::Vector3d z0 = x.cross(y0);
+  T_base_laser.linear().col(0) = x;
+  T_base_laser.linear().col(1) = std::cos(view.roll) * y0 + std::sin(view.roll) * z0;
+  T_base_laser.linear().col(2) = -std::sin(view.roll) * y0 + std::cos(view.roll) * z0;
+  T_base_laser.translation() = look + view.distance * out;
+  const Pose3 T_arm_base_tool0 =
+      robot.T_base_arm_base.inverse() * T_base_laser * robot.T_tool0_arm_laser.inverse();
+  const arm::IkResult r = ik.Solve(T_arm_base_tool0, q_near);
+  if (!r.ok()) return std::nullopt;
+  return r.q;
 }
 
 Vector6d AimAt(const RobotModel& robot, const Eigen::Vector2d& target_in_base, const Vector6d& posture) {
@@ -82,8 +119,15 @@ SweepRecording SweepRecorder::Record(const Eigen::Vector2d& target_in_base, cons
   const double bearing =
       std::atan2(target_in_base.y() - foot.y(), target_in_base.x() - foot.x()) + std::asin(L / D);
   const double reach = std::sqrt(D * D - L * L) + spec.aim_offset.x();
-  const Vector6d aim =
-      AimAt(arm_.robot(), foot + reach * Eigen::Vector2d(std::cos(bearing), std::sin(bearing)), posture);
+  const Eigen::Vector2d look = foot + reach * Eigen::Vector2d(std::cos(bearing), std::sin(bearing));
+  Vector6d aim;
+  if (spec.view) {
+    const auto q = ViewPose(arm_.ik(), arm_.robot(), look, *spec.view, posture);
+    if (!q) throw std::runtime_error("sweep '" + name + "': its view is out of the arm's reach");
+    aim = *q;
+  } else {
+    aim = AimAt(arm_.robot(), look, posture);
+  }
   Vector6d start = aim + spec.pose_offset;
   double from = start[spec.joint] + spec.from, to = start[spec.joint] + spec.to;
   if (reverse) std::swap(from, to);
@@ -153,7 +197,8 @@ void SweepRecorder::Drain(SweepRecording* rec) {
 
 LaserCalibrationPlan LaserCalibrationPlan::FromConfig(const ConfigNode& config) {
   config.ExpectMap();
-  config.ExpectKeys({"cube_in_base", "cube_size", "sweeps", "scan_posture_deg", "beam_stride", "calibration"});
+  config.ExpectKeys({"cube_in_base", "cube_size", "sweeps", "scan_posture_deg", "beam_stride", "min_range",
+                     "crop_radius", "calibration"});
   LaserCalibrationPlan plan;
   const auto cb = config["cube_in_base"].AsNumbers(3);
   plan.cube_in_base = Eigen::Vector3d(cb[0], cb[1], DegToRad(cb[2]));
@@ -166,6 +211,8 @@ LaserCalibrationPlan LaserCalibrationPlan::FromConfig(const ConfigNode& config) 
     for (int k = 0; k < 6; ++k) plan.scan_posture[k] = DegToRad(v[static_cast<std::size_t>(k)]);
   }
   config.ReadPositive("beam_stride", plan.beam_stride);
+  config.ReadNonNegative("min_range", plan.min_range);
+  config.ReadNonNegative("crop_radius", plan.crop_radius);
   if (auto o = config.Find("calibration")) plan.calibration = CalibrationOptions::FromConfig(*o);
   return plan;
 }
@@ -180,13 +227,22 @@ std::vector<CalibrationSweep> RecordCubeSweeps(SweepRecorder& recorder, const Ro
                                                std::vector<SweepRecording>* raw) {
   ScanAssemblyOptions assembly;
   assembly.beam_stride = plan.beam_stride;
+  assembly.min_range = plan.min_range;
+  const Eigen::Vector2d cube = plan.cube_in_base.head<2>();
   std::vector<CalibrationSweep> out;
   for (std::size_t k = 0; k < plan.sweeps.size(); ++k) {
     const std::string name = fmt::format("calibration sweep {} of {} (joint {})", k + 1, plan.sweeps.size(),
                                          plan.sweeps[k].joint + 1);
     if (progress) progress(name);
     SweepRecording rec = recorder.Record(plan.cube_in_base.head<2>(), plan.scan_posture, plan.sweeps[k], k % 2 == 1, name);
-    out.push_back({name, AssembleSweep(rec.scans, rec.joint_states, model, assembly).points});
+    std::vector<SweepPoint> points = AssembleSweep(rec.scans, rec.joint_states, model, assembly).points;
+    if (plan.crop_radius > 0.0) {
+      std::erase_if(points, [&](const SweepPoint& p) {
+        const Eigen::Vector3d p_base = p.T_base_tool0 * (model.T_tool0_arm_laser * p.p_laser);
+        return (p_base.head<2>() - cube).norm() > plan.crop_radius;
+      });
+    }
+    out.push_back({name, std::move(points)});
     if (raw) raw->push_back(std::move(rec));
   }
   return out;
@@ -194,9 +250,10 @@ std::vector<CalibrationSweep> RecordCubeSweeps(SweepRecorder& recorder, const Ro
 
 CalibrationSummary CalibrateArmLaser(hal::Robot& robot, const RobotModel& model, const arm::ArmOptions& arm_options,
                                      const LaserCalibrationPlan& plan, const Vector6d& q_start,
-                                     const std::function<void(const std::string&)>& progress) {
+                                     const std::function<void(const std::string&)>& progress,
+                                     const SweepRecorderOptions& recorder_options) {
   arm::ArmPrimitives arm(model, arm_options);
-  SweepRecorder recorder(robot, arm, q_start);
+  SweepRecorder recorder(robot, arm, q_start, recorder_options);
   std::vector<CalibrationSweep> sweeps;
   try {
     sweeps = RecordCubeSweeps(recorder, model, plan, progress);

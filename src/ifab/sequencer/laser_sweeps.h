@@ -7,6 +7,7 @@
 /// and Table II experiments; the robot is reached only through hal::Robot.
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,9 +24,22 @@ class ConfigNode;
 
 namespace ifab::sequencer {
 
-/// One sweep: joint `joint` (0-based) from `from` to `to` about the aimed scan pose, the other
-/// joints at the scan pose plus `pose_offset` (e.g. joint 6 turned 90 deg so the scan plane
-/// crosses a joint-1 sweep).
+/// Where the laser looks from, relative to the look point (the target plus the sweep's aim
+/// offset): the scan pose is then found by IK instead of by aiming a posture.
+struct LaserView {
+  double distance{1.2};   ///< [m] laser origin to the look point
+  double elevation{0.8};  ///< [rad] the centre beam's angle below horizontal
+  double azimuth{0.0};    ///< [rad] the laser's bearing from the look point, from the side of the
+                          ///< arm's foot (0: between the foot and the target, looking away from it)
+  double roll{0.0};       ///< [rad] scan plane about the centre beam (0: it holds the horizontal
+                          ///< perpendicular to the view; 90 deg: it holds the vertical)
+  double height{0.0};     ///< [m] height of the look point above the floor (base z = 0)
+};
+
+/// One sweep: joint `joint` (0-based) from `from` to `to` about the scan pose, the other joints
+/// at the scan pose plus `pose_offset` (e.g. joint 6 turned 90 deg so the scan plane crosses a
+/// joint-1 sweep). The scan pose is the posture aimed at the target (AimAt), or, with `view`,
+/// the IK solution that puts the laser there.
 struct SweepSpec {
   int joint{4};                    ///< swept joint, 0-based
   double from{0.0};                ///< [rad] start, relative to the aimed scan pose
@@ -37,17 +51,24 @@ struct SweepSpec {
   /// (joint 6 at 0) aimed at a lateral offset crosses the target mid-sweep when joints 2, 3 or 5
   /// sweep.
   Eigen::Vector2d aim_offset{Eigen::Vector2d::Zero()};
+  std::optional<LaserView> view;   ///< set: the scan pose by IK from this view
 };
 
 /// Reads a YAML list of sweeps, each
-/// `{joint: 1..6, range_deg: [from, to], speed_deg_s, offset_deg: [6 numbers], aim_offset: [radial, lateral]}`
-/// (speed, offset and aim offset optional). Throws InputError naming the entry and field.
+/// `{joint: 1..6, range_deg: [from, to], speed_deg_s, offset_deg: [6 numbers], aim_offset: [radial, lateral],
+///   view: {distance, elevation_deg, azimuth_deg, roll_deg, height}}`
+/// (all but joint and range_deg optional). Throws InputError naming the entry and field.
 std::vector<SweepSpec> ReadSweepSpecs(const ConfigNode& list);
 
 /// A scan pose whose laser centre beam meets the floor (z = 0 of base) at `target_in_base`:
 /// joint 1 turns towards it, joint 5 tilts the laser until the beam lands at its distance
 /// (design model). The other joints are the posture's.
 Vector6d AimAt(const RobotModel& robot, const Eigen::Vector2d& target_in_base, const Vector6d& posture);
+
+/// The arm configuration (IK, nearest to q_near) that puts the laser at `view` of the look point
+/// (base frame, on the floor), with the design mount; nullopt if out of reach.
+std::optional<Vector6d> ViewPose(arm::IkSolver& ik, const RobotModel& robot, const Eigen::Vector2d& look_in_base,
+                                 const LaserView& view, const Vector6d& q_near);
 
 struct SweepRecorderOptions {
   double settle_time{0.3};  ///< [s] standstill at the sweep's start pose before sweeping
@@ -104,12 +125,18 @@ struct LaserCalibrationPlan {
   Eigen::Vector3d cube_in_base{1.70, 0.0, 0.0};  ///< cube centre x, y [m] and yaw [rad] in base, roughly known
   double cube_size{0.25};                        ///< [m] edge length (the paper: about 0.25 m)
   std::vector<SweepSpec> sweeps;                 ///< the paper: 6-8 sweeps of different joints
-  Vector6d scan_posture{Vector6d::Zero()};       ///< [rad] posture before aiming (joints 1 and 5 aimed)
+  Vector6d scan_posture{Vector6d::Zero()};       ///< [rad] posture aimed by sweeps without a view
+                                                 ///< (joints 1 and 5), and the IK seed of views
   int beam_stride{1};                            ///< keep every n-th beam of the scans
+  double min_range{0.0};                         ///< [m] drop shorter ranges (the UTM-30LX's short-range bias)
+  double crop_radius{0.0};                       ///< [m] keep points this close to the cube horizontally
+                                                 ///< (design mount; 0 = all): the model of a cube on a
+                                                 ///< flat floor holds only near it
   CalibrationOptions calibration;                ///< the solver's options
 
   /// Reads `{cube_in_base: [x, y, yaw_deg], cube_size, sweeps: [...], scan_posture_deg: [6],
-  /// beam_stride, calibration: {...}}`; `cube_in_base` and `sweeps` are required.
+  /// beam_stride, min_range, crop_radius, calibration: {...}}`; `cube_in_base` and `sweeps` are
+  /// required.
   static LaserCalibrationPlan FromConfig(const ConfigNode& config);
 
   /// The cube's pose in base as planned (standing on z = 0).
@@ -117,7 +144,8 @@ struct LaserCalibrationPlan {
 };
 
 /// Records the plan's sweeps of the cube with `recorder` (every other sweep reversed), assembled
-/// with eq. 6 but not yet through the mount. `raw` (if given) receives the recordings.
+/// with eq. 6 but not yet through the mount, ranges below min_range dropped and the points cropped
+/// to crop_radius about the cube. `raw` (if given) receives the recordings.
 std::vector<CalibrationSweep> RecordCubeSweeps(SweepRecorder& recorder, const RobotModel& model,
                                                const LaserCalibrationPlan& plan,
                                                const std::function<void(const std::string&)>& progress,
@@ -126,9 +154,12 @@ std::vector<CalibrationSweep> RecordCubeSweeps(SweepRecorder& recorder, const Ro
 /// Calibrates the arm laser's mount: records the plan's sweeps of the cube, then solves the mount
 /// (from the design mount model.T_tool0_arm_laser) together with the cube's and the ground's
 /// poses (from the plan's, known roughly) with eq. 6 inside eq. 7. The arm returns to q_start.
-/// The mount is summary.T_tool0_laser when summary.IsUsable().
+/// The mount is summary.T_tool0_laser when summary.IsUsable(); a sweep that cannot be planned or
+/// run gives status kNoPoints and its reason in the message. The arm laser is left as
+/// recorder_options.laser_on_between_sweeps says (default on).
 CalibrationSummary CalibrateArmLaser(hal::Robot& robot, const RobotModel& model, const arm::ArmOptions& arm_options,
                                      const LaserCalibrationPlan& plan, const Vector6d& q_start,
-                                     const std::function<void(const std::string&)>& progress);
+                                     const std::function<void(const std::string&)>& progress,
+                                     const SweepRecorderOptions& recorder_options = {});
 
 }  // namespace ifab::sequencer

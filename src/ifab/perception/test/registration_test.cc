@@ -86,6 +86,21 @@ INSTANTIATE_TEST_SUITE_P(Both, RegistrationResiduals,
                          ::testing::Values(RegistrationResidual::kClosest, RegistrationResidual::kRay),
                          [](const auto& p) { return p.param == RegistrationResidual::kClosest ? "closest" : "ray"; });
 
+// Coarse steps on every n-th point first, then all points: the same minimum.
+TEST(Registration, CoarseStepsEndAtTheSameMinimum) {
+  const auto cloud = BrickCloud(1);
+  RegistrationOptions options;
+  const RegistrationSummary fine = Register(cloud, BrickOnGround(kGuessBrick), options);
+  options.coarse_stride = 8;
+  const RegistrationSummary coarse = Register(cloud, BrickOnGround(kGuessBrick), options);
+  ASSERT_EQ(fine.status, RegistrationStatus::kConverged) << fine.BriefReport() << "\n" << coarse.BriefReport();
+  ASSERT_EQ(coarse.status, RegistrationStatus::kConverged) << coarse.BriefReport();
+  const PoseError e = Error(coarse.Find("brick")->T_base_body, fine.Find("brick")->T_base_body);
+  EXPECT_LT(e.translation, 2e-5);
+  EXPECT_LT(e.rotation, 1e-4);
+  EXPECT_NEAR(coarse.num_inliers, fine.num_inliers, 20);  // a few edge points may flip
+}
+
 // The paper's Fig. 4: a block on the ground seen across its edges returns mixed pixels between
 // the block and the floor behind it. The shadow rule removes them.
 TEST(Registration, RemovesShadowPointsAtTheEdgesOfABlockOnTheGround) {
@@ -161,6 +176,37 @@ TEST(Registration, WarnsAboutDirectionsTheScanDoesNotConstrain) {
   EXPECT_NEAR(n.dot(s.bodies[0].T_base_body.translation()), 0.0, 2e-4);
   // Free directions keep their guess (the step damping holds them).
   EXPECT_NEAR(s.bodies[0].T_base_body.translation().x(), 0.1, 1e-4);
+}
+
+// The UTM-30LX reads strong near-normal returns short (paper Fig. 7). Points within
+// min_incidence of their face's normal get no error: the floor is then found where it is.
+TEST(Registration, MinIncidenceLeavesOutNearNormalReturns) {
+  RigidObject ground{"ground", Pose3::Identity(), {Plane{Eigen::Vector3d::UnitZ(), 0.0}}};
+  const std::vector<RegistrationBody> world_bodies{{"ground", Pose3::Identity(), {ground}, true}};
+  const Scene world(world_bodies);
+  testing::SyntheticLaser laser;
+  laser.noisy = false;
+  RandomStream rng(7);
+  auto cloud = testing::SynthesizeCloud(world, YawSweep(-0.2, 0.4), 0.0, 0.5, laser, rng);
+  // A bump like Fig. 7's: beams within 30 deg of the floor's normal read 20 mm short.
+  int bumped = 0;
+  for (auto& p : cloud) {
+    const Eigen::Vector3d u = (p.p - p.origin).normalized();
+    if (-u.z() > std::cos(30.0 * kDeg)) {
+      p.p -= 0.02 * u;
+      ++bumped;
+    }
+  }
+  ASSERT_GT(bumped, 100);
+  RegistrationOptions options;
+  const RegistrationSummary plain = Register(cloud, world_bodies, options);
+  options.min_incidence = 40.0 * kDeg;
+  const RegistrationSummary guarded = Register(cloud, world_bodies, options);
+  ASSERT_TRUE(plain.IsUsable() && guarded.IsUsable());
+  EXPECT_GT(plain.bodies[0].T_base_body.translation().z(), 0.002);  // the bump lifts the floor
+  EXPECT_NEAR(guarded.bodies[0].T_base_body.translation().z(), 0.0, 1e-6);
+  EXPECT_GE(guarded.num_grazing, bumped);
+  EXPECT_EQ(plain.num_grazing, 0);
 }
 
 TEST(UnconstrainedDirections, NamesAxesOrWritesTheDirection) {

@@ -47,6 +47,9 @@ TEST(ReadSweepSpecs, ErrorsNameTheEntryAndField) {
               HasSubstr("speed_deg_s: expected a positive number"));
   EXPECT_THAT(error("- {joint: 2, range_deg: [-1, 1], aim: [0, 1]}\n"), HasSubstr("aim"));
   EXPECT_THAT(error("- {joint: 2, range_deg: [3, 3]}\n"), HasSubstr("range_deg: expected two different angles"));
+  EXPECT_THAT(error("- {joint: 2, range_deg: [-1, 1], view: {distance: 1, elevation_deg: 95}}\n"),
+              HasSubstr("[0].view.elevation_deg: expected"));
+  EXPECT_THAT(error("- {joint: 2, range_deg: [-1, 1], view: {range: 1}}\n"), HasSubstr("range"));
 }
 
 TEST(LaserCalibrationPlan, ReadsASectionWithDefaults) {
@@ -77,6 +80,39 @@ TEST(AimAt, CentreBeamMeetsTheFloorAtTheTarget) {
     const Eigen::Vector3d hit = o - (o.z() / d.z()) * d;
     EXPECT_LT((hit.head<2>() - target).norm(), 0.02) << target.transpose();
   }
+}
+
+TEST(ViewPose, PutsTheLaserWhereTheViewSaysLookingAtTheTarget) {
+  const RobotModel robot = LoadRobotModel(DataPath("robots/insitu_fabricator.urdf"));
+  arm::IkSolver ik(robot);
+  Vector6d posture;
+  posture << 0.0, DegToRad(17.0), DegToRad(17.0), 0.0, DegToRad(69.0), 0.0;
+  const Eigen::Vector2d look(1.75, 0.2);
+  const auto specs = ReadSweepSpecs(ConfigNode::FromString(
+      "- {joint: 5, range_deg: [-5, 5], view: {distance: 0.9, elevation_deg: 35, azimuth_deg: 60, roll_deg: 90}}\n",
+      "v.yaml"));
+  ASSERT_TRUE(specs[0].view.has_value());
+  const LaserView& view = *specs[0].view;
+  const auto q = ViewPose(ik, robot, look, view, posture);
+  ASSERT_TRUE(q.has_value());
+  const Pose3 T = robot.T_base_arm_base * robot.ArmForwardKinematics(*q) * robot.T_tool0_arm_laser;
+  const Eigen::Vector3d target(look.x(), look.y(), 0.0);
+  EXPECT_NEAR((T.translation() - target).norm(), 0.9, 1e-4);
+  const Eigen::Vector3d beam = T.linear().col(0);
+  EXPECT_NEAR(beam.dot((target - T.translation()).normalized()), 1.0, 1e-8);
+  EXPECT_NEAR(std::asin(-beam.z()), DegToRad(35.0), 1e-4);
+  // Azimuth 60 deg from the arm foot's side; roll 90 deg: the scan plane holds the vertical.
+  const Eigen::Vector2d foot = robot.T_base_arm_base.translation().head<2>();
+  const Eigen::Vector2d from_look = (T.translation().head<2>() - look).normalized();
+  const Eigen::Vector2d to_foot = (foot - look).normalized();
+  EXPECT_NEAR(std::atan2(to_foot.x() * from_look.y() - to_foot.y() * from_look.x(), to_foot.dot(from_look)),
+              DegToRad(60.0), 1e-4);
+  EXPECT_NEAR(std::abs(T.linear().col(2).z()), 0.0, 1e-4);
+  // Out of reach: 3 m up.
+  LaserView far = view;
+  far.distance = 3.0;
+  far.elevation = DegToRad(89.0);
+  EXPECT_FALSE(ViewPose(ik, robot, look, far, posture).has_value());
 }
 
 // A robot whose arm arrives at once and whose sensors send nothing but a gyro sample per Wait:
