@@ -51,6 +51,13 @@ class RecordingRobot final : public hal::Robot {
   std::vector<SyncPulse> TakeSyncPulses() override { return sim_.TakeSyncPulses(); }
 
   std::vector<Stamped<Pose2>> truth;
+  /// The sampled true base poses as CSV (t, x, y, theta; SI units), to redraw Fig. 6.
+  void WriteTruthCsv(const std::string& path) const {
+    std::ofstream csv(path);
+    csv << "t,x,y,theta\n";
+    for (const auto& s : truth)
+      csv << fmt::format("{:.4f},{:.5f},{:.5f},{:.6f}\n", s.t, s.value.x, s.value.y, s.value.theta);
+  }
   Seconds truth_period{0.1};  ///< [s] how often the true pose is recorded
 
  private:
@@ -239,10 +246,7 @@ nlohmann::json Run(const RunContext& ctx) {
     if (!log.cloud.empty() && ctx.config->Get<bool>("write_clouds", true))
       WritePly((out / fmt::format("cloud_visit_{:02d}.ply", log.visit)).string(), ToPointCloud(log.cloud));
   }
-  std::ofstream true_csv(out / "trajectory_true.csv");
-  true_csv << "t,x,y,theta\n";
-  for (const auto& s : robot.truth)
-    true_csv << fmt::format("{:.3f},{:.4f},{:.4f},{:.5f}\n", s.t, s.value.x, s.value.y, s.value.theta);
+  robot.WriteTruthCsv((out / "trajectory_true.csv").string());
 
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   nlohmann::json r;
@@ -350,10 +354,7 @@ nlohmann::json RunManeuvers(const RunContext& ctx) {
     for (const auto& s : log.estimated)
       est_csv << fmt::format("{},{:.4f},{:.5f},{:.5f},{:.6f}\n", log.visit, s.t, s.value.x, s.value.y, s.value.theta);
   }
-  std::ofstream true_csv(std::filesystem::path(ctx.out_dir) / "trajectory_true.csv");
-  true_csv << "t,x,y,theta\n";
-  for (const auto& s : robot.truth)
-    true_csv << fmt::format("{:.4f},{:.5f},{:.5f},{:.6f}\n", s.t, s.value.x, s.value.y, s.value.theta);
+  robot.WriteTruthCsv((std::filesystem::path(ctx.out_dir) / "trajectory_true.csv").string());
   nlohmann::json r;
   r["maneuvers"] = end_m.n;
   r["end_error_vs_desired_m_mean"] = end_m.Mean();

@@ -214,17 +214,18 @@ bool Mission::Reposition(const BuildingPosition& goal, VisitLog& log) {
   // A tracked base cannot move sideways: an offset the tracking left at the end is driven out by
   // reversing along the goal's line and coming forward onto it (or forward first, if reversing
   // would hit something).
-  const base::FootprintChecker footprint(Scene(), c_.base_geometry);
+  std::optional<base::FootprintChecker> footprint;  // built only if a re-approach is needed
   spdlog::debug("{}: maneuver ended {} at {:.1f} cm from the goal ({:.1f} cm sideways)", goal.name,
                 arrived ? "in tolerance" : "on time-out", 100.0 * u.end_distance, 100.0 * u.end_lateral_error);
   while (arrived && u.end_distance > o_.reapproach_tolerance && log.reapproaches < o_.max_reapproaches) {
+    if (!footprint) footprint.emplace(Scene(), c_.base_geometry);
     std::optional<std::array<base::BaseTrajectory, 2>> legs;
     for (bool reverse_first : {true, false}) {
       auto candidate = base::ReapproachTrajectories(T_site_base_, goal.T_site_base, o_.reapproach_distance,
                                                     o_.reapproach_speed, reverse_first);
       bool clear = true;
       for (const auto& leg : candidate)
-        for (const auto& p : leg.points) clear = clear && footprint.Clearance(p.pose) > 0.0;
+        for (const auto& p : leg.points) clear = clear && footprint->Clearance(p.pose) > 0.0;
       if (clear) {
         legs = std::move(candidate);
         break;

@@ -117,8 +117,7 @@ ClockMapping ClockSync::Fit() const {
   const double mean = sum_x_ / static_cast<double>(pairs_.size());
   const Seconds device_ref = origin_.device + mean;
   const Seconds host0 = origin_.host;
-  std::vector<Point> hull(hull_);
-  for (auto& h : hull) h.x -= mean;
+  const std::vector<Point>& hull = hull_;  // x relative to origin_: the mean device time is at x = mean
 
   ClockMapping m;
   m.device_ref = device_ref;
@@ -126,15 +125,15 @@ ClockMapping ClockSync::Fit() const {
   double y_at_ref = 0.0;
   bool line = false;
   if (hull.size() >= 2) {
-    // TICSync: the hull edge over the mean device time (x = 0) minimises the summed delays.
+    // TICSync: the hull edge over the mean device time minimises the summed delays.
     std::size_t i = 0;
-    while (i + 2 < hull.size() && hull[i + 1].x < 0.0) ++i;
+    while (i + 2 < hull.size() && hull[i + 1].x < mean) ++i;
     const Point& a = hull[i];
     const Point& b = hull[i + 1];
     const double rate = (b.y - a.y) / (b.x - a.x);
     if (std::abs(rate - 1.0) <= options_.max_abs_skew) {
       m.rate = rate;
-      y_at_ref = a.y - rate * a.x;
+      y_at_ref = a.y + rate * (mean - a.x);
       line = true;
     }
   }

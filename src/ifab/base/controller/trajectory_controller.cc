@@ -112,15 +112,11 @@ BaseControllerOutput BaseTrajectoryController::Update(const Pose2& pose, double 
   at_end_ = at_end_ || segments == 0 || out.closest >= segments - 1e-9;
   const bool within = (at_end_ || out.closest >= segments - 1) && std::abs(along_end) <= options_.goal_tolerance_xy &&
                       std::abs(e_theta_end) <= options_.goal_tolerance_theta;
-  if (within && !done_) {
+  if (!done_ && !within) stop_time_ = -1.0;  // (coasted) out of tolerance: control again
+  if (!done_ && within) {
     if (stop_time_ < 0.0) stop_time_ = t;
-    if (t - stop_time_ >= options_.settle_hold) {
-      done_ = true;
-    } else {
-      return out;  // stopped (zero command), watching the pose settle
-    }
-  } else if (!done_) {
-    stop_time_ = -1.0;
+    if (t - stop_time_ < options_.settle_hold) return out;  // stopped (zero command), watching it settle
+    done_ = true;
   }
   if (done_) {
     out.done = true;

@@ -3,19 +3,13 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "ifab/core/testing/error_of.h"
+
 namespace ifab {
 namespace {
 
 using ::testing::HasSubstr;
-
-std::string ErrorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
+using testing::ErrorOf;
 
 TEST(Config, ReadsTypedFieldsAndKeepsDefaults) {
   const auto c = ConfigNode::FromString("a: 1.5\nb: 3\nname: x\nv: [1, 2, 3]\n", "t.yaml");

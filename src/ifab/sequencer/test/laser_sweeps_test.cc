@@ -6,20 +6,13 @@
 #include "ifab/core/angles.h"
 #include "ifab/core/config.h"
 #include "ifab/core/data_path.h"
+#include "ifab/core/testing/error_of.h"
 
 namespace ifab::sequencer {
 namespace {
 
 using ::testing::HasSubstr;
-
-std::string ErrorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
+using testing::ErrorOf;
 
 TEST(ReadSweepSpecs, ReadsDegreesAsRadiansAndZeroBasedJoints) {
   const auto c = ConfigNode::FromString(

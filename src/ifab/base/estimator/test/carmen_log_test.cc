@@ -7,6 +7,7 @@
 
 #include "ifab/core/angles.h"
 #include "ifab/core/error.h"
+#include "ifab/core/testing/error_of.h"
 
 namespace ifab::base {
 namespace {
@@ -14,15 +15,7 @@ namespace {
 using ::testing::HasSubstr;
 
 const std::string kData = ESTIMATOR_TEST_DATA;
-
-std::string ErrorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
+using testing::ErrorOf;
 
 TEST(CarmenLog, ReadsFlaserRobotlaserAndOdomAndSkipsTheRest) {
   const CarmenLog log = ReadCarmenLog(kData + "/good.clf");
