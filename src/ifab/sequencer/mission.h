@@ -91,6 +91,7 @@ struct VisitLog {
   int reapproaches{0};               ///< straight re-approaches after the planned maneuver
   std::string registration_report;
   std::vector<RayPoint> cloud;       ///< the last assembled sweep (base frame)
+  std::vector<PointLabel> cloud_labels;  ///< the registration's label per point of `cloud` (Fig. 4)
   Pose3 T_site_base_at_scan{Pose3::Identity()};
   std::vector<int> bricks_placed;    ///< brick indices placed at this visit
   std::string failure;               ///< empty when the visit went well

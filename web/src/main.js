@@ -1,0 +1,538 @@
+// The report page of an ifab run folder. ifab inlines this bundle and the run's data (a JSON
+// element #ifab-data: results.json, the results table, CSV texts, scene.json, decimated clouds)
+// into report.html; everything drawn here comes from that data. window.ifabReport tells a test
+// (tests/browser) what was drawn and when the page is ready.
+import Plotly from 'plotly.js-dist-min';
+import css from './style.css';
+import { parseCsv, stats } from './csv.js';
+import { createReplay } from './replay.js';
+import { createViewer, boxMesh, mat4 } from './viewer.js';
+import { PAPER } from './paper.js';
+
+const report = { ready: false, figures: {}, errors: [], replay: null, scriptStart: performance.now() };
+window.ifabReport = report;
+
+const data = JSON.parse(document.getElementById('ifab-data').textContent);
+const csv = {};
+for (const [name, text] of Object.entries(data.csv || {})) csv[name] = parseCsv(text);
+const app = document.getElementById('app');
+const style = document.createElement('style');
+style.textContent = css;
+document.head.appendChild(style);
+
+const el = (tag, attrs = {}, ...kids) => {
+  const e = document.createElement(tag);
+  for (const [k, v] of Object.entries(attrs)) {
+    if (k === 'class') e.className = v; else e.setAttribute(k, v);
+  }
+  for (const k of kids) e.append(k);
+  return e;
+};
+const nav = el('nav');
+const main = el('main');
+const pending = [];  // figure draws, in order (each after the previous one)
+
+function section(id, title, caption) {
+  const s = el('section', { class: 'fig', id });
+  s.append(el('h2', {}, title));
+  if (caption) s.append(el('p', { class: 'cap' }, caption));
+  main.append(s);
+  nav.append(el('a', { href: `#${id}` }, title.split(':')[0]));
+  return s;
+}
+
+const layoutBase = { margin: { l: 55, r: 15, t: 30, b: 45 }, font: { size: 12 }, legend: { orientation: 'h', y: -0.18 } };
+// A Plotly figure; `what` records what it holds for the test (points per trace).
+function plot(parent, id, traces, layout, what = {}) {
+  const div = el('div', { class: 'plot', id });
+  parent.append(div);
+  pending.push(async () => {
+    await Plotly.newPlot(div, traces, { ...layoutBase, ...layout }, { responsive: true, displaylogo: false });
+    report.figures[id] = { traces: traces.map((t) => t.name), ...what };
+  });
+  return div;
+}
+const count = (a) => a.filter((v) => v !== null && v !== undefined).length;
+// Per-group polylines joined into one trace, separated by nulls (no line across groups).
+function joinGroups(groupCol, cols, table) {
+  const out = cols.map(() => []);
+  for (let r = 0; r < table.rows; r++) {
+    if (r > 0 && table.col[groupCol][r] !== table.col[groupCol][r - 1]) out.forEach((o) => o.push(null));
+    cols.forEach((c, i) => out[i].push(table.col[c][r]));
+  }
+  return out;
+}
+
+// Footprints of the site's walls and obstacles as closed polylines for 2D plots.
+function siteShapes(site) {
+  const xs = [], ys = [];
+  for (const b of [...(site.walls || []), ...(site.obstacles || [])]) {
+    const m = b.pose;  // column-major 4x4
+    const corner = (sx, sy) => [m[12] + m[0] * sx + m[4] * sy, m[13] + m[1] * sx + m[5] * sy];
+    const h = [b.size[0] / 2, b.size[1] / 2];
+    for (const [a, c] of [[-1, -1], [1, -1], [1, 1], [-1, 1], [-1, -1]]) {
+      const p = corner(a * h[0], c * h[1]);
+      xs.push(p[0]); ys.push(p[1]);
+    }
+    xs.push(null); ys.push(null);
+  }
+  return { x: xs, y: ys, mode: 'lines', name: 'walls, obstacles', line: { color: '#8a939c' }, fill: 'toself', fillcolor: 'rgba(160,168,176,0.35)' };
+}
+
+function header() {
+  const r = data.results || {};
+  const title = data.experiment === 'estimate' ? 'ifab estimate' : `ifab run ${data.experiment}`;
+  const bits = [];
+  if (r.seed !== undefined) bits.push(`seed ${r.seed}`);
+  if (r.runs !== undefined) bits.push(`${r.runs} runs`);
+  if (r.sim_seconds !== undefined) bits.push(`${r.sim_seconds.toFixed(0)} s simulated`);
+  if (r.wall_seconds !== undefined) bits.push(`${r.wall_seconds.toFixed(0)} s wall`);
+  app.append(el('header', {}, el('h1', {}, title), el('div', { class: 'sub' }, `${data.folder} · ${bits.join(' · ')}`)));
+  app.append(nav, main);
+}
+
+function resultsTable() {
+  if (!data.table) return;
+  const s = section('results', 'Results beside the paper', 'The figures of results.json, named and in units as on the terminal; the last column is the paper\'s.');
+  const t = el('table', { class: 'results' });
+  t.append(el('tr', {}, ...data.table.header.map((h) => el('th', {}, h))));
+  for (const row of data.table.rows) {
+    t.append(el('tr', {}, ...row.map((c, i) => el('td', i === row.length - 1 && i > 1 ? { class: 'paper' } : {}, c))));
+  }
+  s.append(t);
+  report.figures.results = { rows: data.table.rows.length };
+}
+
+// ---- brick stack ---------------------------------------------------------------------------
+
+const cloudOf = (visit) => (data.clouds || []).find((c) => c.file === `cloud_visit_${String(visit).padStart(2, '0')}.ply`);
+const visitRow = (v) => { const V = csv['visits.csv']; const r = V ? V.col.visit.indexOf(v) : -1; return r; };
+// The pose the mission took for a visit's cloud: its registration's, else the estimate.
+function cloudPose(v) {
+  const V = csv['visits.csv'], r = visitRow(v);
+  const loc = V.col.localized[r] === 1 || V.col.localized[r] === 'true';
+  return loc ? [V.col.loc_x[r], V.col.loc_y[r], V.col.loc_theta[r]] : [V.col.end_x[r], V.col.end_y[r], V.col.end_theta[r]];
+}
+function toSite(c, pose) {
+  const n = c.xyz_mm.length / 3, x = new Array(n), y = new Array(n), z = new Array(n);
+  const cs = Math.cos(pose[2]), sn = Math.sin(pose[2]);
+  for (let i = 0; i < n; i++) {
+    const px = c.xyz_mm[3 * i] / 1000, py = c.xyz_mm[3 * i + 1] / 1000;
+    x[i] = pose[0] + cs * px - sn * py; y[i] = pose[1] + sn * px + cs * py; z[i] = c.xyz_mm[3 * i + 2] / 1000;
+  }
+  return { x, y, z, n };
+}
+// Bricks standing when visit v scanned: those placed at earlier visits (designed poses).
+function bricksBefore(v) {
+  const out = [];
+  for (const vi of data.scene.visits) if (vi.visit < v) out.push(...vi.bricks_placed);
+  return out;
+}
+// Fig. 3 in three.js: the cloud coloured by height, the bricks below in grey, the registered one
+// in red. Returns what the view holds, read back from its scene graph.
+function fig3View(container) {
+  const v = createViewer(container, { position: [0.9, -1.3, 1.0], target: [0, 0, 0.1] });
+  const { THREE } = v;
+  let group = null;
+  const show = (visit) => {
+    if (group) v.scene.remove(group);
+    group = new THREE.Group();
+    const c = cloudOf(visit);
+    const pts = toSite(c, cloudPose(visit));
+    const before = bricksBefore(visit);
+    const top = before[before.length - 1];
+    const m = data.scene.designed_bricks[top];
+    const pos = new Float32Array(3 * pts.n), col = new Float32Array(3 * pts.n);
+    const zs = pts.z.slice().sort((a, b) => a - b);
+    const z0 = zs[Math.floor(0.02 * zs.length)] ?? 0, z1 = zs[Math.floor(0.98 * zs.length)] ?? 1;
+    const color = new THREE.Color();
+    for (let i = 0; i < pts.n; i++) {
+      pos.set([pts.x[i] - m[12], pts.y[i] - m[13], pts.z[i]], 3 * i);
+      color.setHSL(0.65 - 0.5 * Math.min(1, Math.max(0, (pts.z[i] - z0) / (z1 - z0 || 1))), 0.8, 0.42);
+      col.set([color.r, color.g, color.b], 3 * i);
+    }
+    const g = new THREE.BufferGeometry();
+    g.setAttribute('position', new THREE.BufferAttribute(pos, 3));
+    g.setAttribute('color', new THREE.BufferAttribute(col, 3));
+    const cloud = new THREE.Points(g, new THREE.PointsMaterial({ size: 0.008, vertexColors: true }));
+    cloud.name = 'cloud';
+    group.add(cloud);
+    const size = data.scene.site.brick;
+    const place = (mesh, k) => {
+      mesh.applyMatrix4(mat4(data.scene.designed_bricks[k]));
+      mesh.position.x -= m[12]; mesh.position.y -= m[13];
+      group.add(mesh);
+      return mesh;
+    };
+    before.slice(0, -1).forEach((k) => place(boxMesh(size, 0x9aa3ad, 0.35), k).name = `brick ${k + 1}`);
+    if (top !== undefined) {
+      const red = place(boxMesh(size, 0xd62728, 0.55), top);
+      red.name = 'registered brick';
+      red.add(new THREE.LineSegments(new THREE.EdgesGeometry(red.geometry), new THREE.LineBasicMaterial({ color: 0x8b0000 })));
+    }
+    // Frame the cloud: the camera at 1.5 times its horizontal radius, from the robot's side.
+    const r = pts.x.map((x, i) => Math.hypot(x - m[12], pts.y[i] - m[13])).sort((a, b) => a - b)[Math.floor(0.9 * pts.n)] || 0.5;
+    const pose = cloudPose(visit);
+    const dir = new THREE.Vector2(pose[0] - m[12], pose[1] - m[13]).normalize();
+    v.camera.position.set(1.3 * r * dir.x - 0.5 * r * dir.y, 1.3 * r * dir.y + 0.5 * r * dir.x, m[14] + 1.1 * r);
+    v.controls.target.set(0, 0, m[14]);
+    v.controls.update();
+    v.scene.add(group);
+    v.render();
+    report.figures.fig3 = { visit, stride: c.stride, cloud_points: c.points };
+  };
+  // Read back from the scene what is drawn: the cloud's points and the registered brick.
+  const inspect = () => {
+    const cloud = group && group.getObjectByName('cloud');
+    const brick = group && group.getObjectByName('registered brick');
+    const px = v.litPixels();
+    return { points: cloud ? cloud.geometry.getAttribute('position').count : 0,
+      registered_brick: brick ? brick.geometry.getAttribute('position').count : 0,
+      lit: px.lit, red: px.red, total: px.total, visit: report.figures.fig3 && report.figures.fig3.visit, stride: report.figures.fig3 && report.figures.fig3.stride };
+  };
+  return { show, inspect };
+}
+
+function brickStack() {
+  const sc = data.scene;
+  const hasClouds = (data.clouds || []).some((c) => /cloud_visit_/.test(c.file));
+  // Fig. 3
+  if (hasClouds && sc && csv['visits.csv']) {
+    const visits = data.clouds.map((c) => /cloud_visit_(\d+)/.exec(c.file)).filter(Boolean).map((m) => Number(m[1]))
+      .filter((v) => bricksBefore(v).length > 0);
+    const s = section('fig3', 'Fig. 3: the assembled cloud of a visit and the registered brick',
+      'The arm laser\'s sweep at a building position (eq. 6), placed in the site by the pose its registration gave (eq. 7); ' +
+      'the brick registered against in red, the bricks below it in grey (designed poses). Pick the visit:');
+    const sel = el('select', { id: 'fig3-visit' });
+    visits.forEach((v) => sel.append(el('option', { value: v }, `visit ${v} (${sc.visits.find((x) => x.visit === v)?.position ?? ''})`)));
+    s.append(el('div', { class: 'controls' }, 'visit ', sel));
+    const view = el('div', { id: 'fig3-view', class: 'view3d' });
+    s.append(view);
+    if (visits.length) {
+      pending.push(async () => {
+        const f = fig3View(view);
+        f.show(visits[0]);
+        report.fig3 = f;
+        sel.addEventListener('change', () => f.show(Number(sel.value)));
+      });
+    }
+    fig4(visits[visits.length - 1]);
+  }
+  fig6();
+  brickErrors();
+  replaySection();
+}
+
+// Fig. 4: the points of one sweep in the registered top brick's frame, seen along its long axis.
+function fig4(visit) {
+  const c = cloudOf(visit);
+  if (!c || !c.label) return;
+  const pts = toSite(c, cloudPose(visit));
+  const before = bricksBefore(visit);
+  const m = data.scene.designed_bricks[before[before.length - 1]];
+  const size = data.scene.site.brick;
+  // In the brick frame (columns 0-2 of m are its axes).
+  const groups = { 0: [[], []], 1: [[], []], other: [[], []] };
+  let near = 0;
+  for (let i = 0; i < pts.n; i++) {
+    const d = [pts.x[i] - m[12], pts.y[i] - m[13], pts.z[i] - m[14]];
+    const bx = d[0] * m[0] + d[1] * m[1] + d[2] * m[2];
+    const by = d[0] * m[4] + d[1] * m[5] + d[2] * m[6];
+    const bz = d[0] * m[8] + d[1] * m[9] + d[2] * m[10];
+    if (Math.abs(bx) > size[0] / 2 || Math.abs(by) > 0.3 || bz < -0.3) continue;
+    near++;
+    const g = c.label[i] === 0 ? groups[0] : c.label[i] === 1 ? groups[1] : groups.other;
+    g[0].push(by); g[1].push(bz);
+  }
+  const rect = { type: 'rect', x0: -size[1] / 2, x1: size[1] / 2, y0: -size[2] / 2, y1: size[2] / 2, line: { color: '#d62728' } };
+  const counts = c.label_counts || {};
+  const s = section('fig4', 'Fig. 4: shadow points, before and after removal',
+    `Visit ${visit}: the points within the top brick's length, seen along it (brick frame; the brick in red). ` +
+    `The registration flagged ${counts['1'] || 0} of ${c.points} points as shadow points (a ray past an edge, far from the model) ` +
+    'and gave them zero error; right: what it fitted.');
+  const row = el('div', { class: 'row' });
+  s.append(row);
+  const lay = (t) => ({ title: { text: t }, xaxis: { title: { text: 'across the brick [m]' } }, yaxis: { title: { text: 'up [m]' }, scaleanchor: 'x' }, shapes: [rect], height: 420 });
+  const inl = { x: groups[0][0], y: groups[0][1], mode: 'markers', type: 'scatter', name: 'fitted', marker: { size: 3, color: '#1f77b4' } };
+  const sh = { x: groups[1][0], y: groups[1][1], mode: 'markers', type: 'scatter', name: 'shadow points', marker: { size: 4, color: '#ff7f0e' } };
+  const ot = { x: groups.other[0], y: groups.other[1], mode: 'markers', type: 'scatter', name: 'other zero-error (outlier, grazing, fixed)', marker: { size: 3, color: '#b0b7be' } };
+  plot(row, 'fig4-before', [inl, sh, ot], lay('before removal'), { points: near, shadow: groups[1][0].length });
+  plot(row, 'fig4-after', [inl, ot], lay('after removal'), { points: near - groups[1][0].length });
+}
+
+function fig6() {
+  const P = csv['trajectory_planned.csv'], E = csv['trajectory_estimated.csv'], T = csv['trajectory_true.csv'], V = csv['visits.csv'];
+  if (!E || !T) return;
+  const s = section('fig6', 'Fig. 6: planned, estimated and true base trajectories',
+    'Every maneuver between building positions: the planner\'s trajectory, the estimator\'s poses while driving (eq. 1-3) and the simulator\'s true pose; ' +
+    'a step marks each localization (from the estimate at the end of the maneuver to the registered pose).');
+  const traces = [];
+  if (data.scene && data.scene.site) traces.push(siteShapes(data.scene.site));
+  const what = {};
+  if (P) {
+    const [x, y] = joinGroups('visit', ['x', 'y'], P);
+    traces.push({ x, y, mode: 'lines', name: 'planned', line: { dash: 'dash', color: '#2ca02c' } });
+    what.planned = count(x);
+  }
+  { const [x, y] = joinGroups('visit', ['x', 'y'], E);
+    traces.push({ x, y, mode: 'lines', name: 'estimated', line: { color: '#1f77b4' } });
+    what.estimated = count(x); }
+  traces.push({ x: T.col.x, y: T.col.y, mode: 'lines', name: 'true', line: { color: '#111', width: 1 } });
+  what.true = count(T.col.x);
+  if (V && V.col.loc_x) {
+    const x = [], y = [];
+    let steps = 0;
+    for (let r = 0; r < V.rows; r++) {
+      if (!(V.col.localized[r] === 1 || V.col.localized[r] === 'true')) continue;
+      x.push(V.col.end_x[r], V.col.loc_x[r], null); y.push(V.col.end_y[r], V.col.loc_y[r], null); steps++;
+    }
+    traces.push({ x, y, mode: 'lines+markers', name: 'localization step', line: { color: '#d62728', width: 2 }, marker: { size: 5 } });
+    what.steps = steps;
+  }
+  if (data.scene && data.scene.positions) {
+    const ps = data.scene.positions;
+    traces.push({ x: ps.map((p) => p.x), y: ps.map((p) => p.y), text: ps.map((p) => p.name), mode: 'markers+text', textposition: 'top center',
+      name: 'building positions', marker: { symbol: 'x', size: 9, color: '#9467bd' } });
+  }
+  plot(s, 'fig6-plot', traces, { height: 620, xaxis: { title: { text: 'x [m]' } }, yaxis: { title: { text: 'y [m]' }, scaleanchor: 'x' } }, what);
+  // Per maneuver: the localization correction.
+  if (V && V.col.loc_x) {
+    const vx = [], dm = [], dd = [];
+    for (let r = 0; r < V.rows; r++) {
+      if (!(V.col.localized[r] === 1 || V.col.localized[r] === 'true')) continue;
+      vx.push(V.col.visit[r]);
+      dm.push(100 * Math.hypot(V.col.loc_x[r] - V.col.end_x[r], V.col.loc_y[r] - V.col.end_y[r]));
+      let a = V.col.loc_theta[r] - V.col.end_theta[r];
+      a = Math.atan2(Math.sin(a), Math.cos(a));
+      dd.push(Math.abs(a) * 180 / Math.PI);
+    }
+    plot(s, 'fig6-steps', [{ x: vx, y: dm, type: 'bar', name: 'correction [cm]' }, { x: vx, y: dd, type: 'bar', name: 'correction [deg]', yaxis: 'y2' },
+      { x: [Math.min(...vx), Math.max(...vx)], y: [PAPER.localization_cm, PAPER.localization_cm], mode: 'lines', name: 'paper mean [cm]', line: { dash: 'dot', color: '#8a3b12' } }],
+    { height: 320, barmode: 'group', xaxis: { title: { text: 'visit' } }, yaxis: { title: { text: 'cm' } }, yaxis2: { overlaying: 'y', side: 'right', title: { text: 'deg' } } },
+    { visits: vx.length });
+  }
+}
+
+function brickErrors() {
+  const B = csv['brick_errors.csv'];
+  if (!B) return;
+  const s = section('bricks', 'Brick errors: per brick and per building position',
+    'Signed error of every placed brick against its designed pose, along its long and short faces, and away from the side the robot placed it from ' +
+    `(the paper's range-bias effect). Dotted: the paper's mean errors (long ${PAPER.brick_long_mm} mm, short ${PAPER.brick_short_mm} mm); dashed: the 1 mm target.`);
+  const k = B.col.brick.map((b) => b + 1);
+  const n = B.rows;
+  const line = (y, name, dash, color) => ({ x: [0.5, n + 0.5], y: [y, y], mode: 'lines', name, line: { dash, color, width: 1 }, showlegend: !!name, hoverinfo: 'skip' });
+  plot(s, 'bricks-plot', [
+    { x: k, y: B.col.error_long_mm, type: 'bar', name: 'long face [mm]' },
+    { x: k, y: B.col.error_short_mm, type: 'bar', name: 'short face [mm]' },
+    { x: k, y: B.col.error_away_mm, type: 'bar', name: 'away from the robot [mm]' },
+    line(PAPER.brick_long_mm, 'paper mean, long', 'dot', '#1f77b4'), line(-PAPER.brick_long_mm, '', 'dot', '#1f77b4'),
+    line(PAPER.brick_short_mm, 'paper mean, short', 'dot', '#ff7f0e'), line(-PAPER.brick_short_mm, '', 'dot', '#ff7f0e'),
+    line(1, '1 mm target', 'dash', '#555'), line(-1, '', 'dash', '#555'),
+  ], { barmode: 'group', height: 380, xaxis: { title: { text: 'brick (bottom to top)' } }, yaxis: { title: { text: 'error [mm]' } } }, { bricks: n });
+  // Per building position (where the robot stood when it placed the brick).
+  if (data.scene && data.scene.visits) {
+    const pos = new Array(n).fill('?');
+    for (const v of data.scene.visits) for (const b of v.bricks_placed) pos[b] = v.position;
+    const box = (col, name) => ({ y: B.col[col], x: pos, type: 'box', name, boxpoints: 'all', jitter: 0.4, pointpos: 0 });
+    plot(s, 'bricks-by-position', [box('error_long_mm', 'long face'), box('error_short_mm', 'short face'), box('error_away_mm', 'away from the robot')],
+      { boxmode: 'group', height: 380, xaxis: { title: { text: 'building position' } }, yaxis: { title: { text: 'error [mm]' } } }, { bricks: n });
+  }
+}
+
+function replaySection() {
+  const R = csv['replay.csv'];
+  if (!R || !data.scene || !data.scene.arm || !csv['brick_errors.csv']) return;
+  const s = section('replay', '3D replay of the mission',
+    'The site, the stack as built (true poses), the base footprint and the arm (the URDF chain\'s links, posed from the recorded joint angles), and each sweep\'s cloud as it was taken. ' +
+    'Drag to orbit, scroll to zoom; the slider replays the mission.');
+  const view = el('div', { id: 'replay-view' });
+  const slider = el('input', { type: 'range', id: 'replay-slider', value: '0' });
+  const play = el('button', { id: 'replay-play' }, 'play');
+  const lab = el('span', { id: 'replay-label' });
+  s.append(el('div', { class: 'controls' }, play, slider), lab, view);
+  pending.push(async () => {
+    const r = createReplay(view, slider, lab, { scene: data.scene, replay: R, sweeps: csv['sweeps.csv'], bricks: csv['brick_errors.csv'],
+      visits: data.scene.visits, clouds: data.clouds || [], visitsCsv: csv['visits.csv'] });
+    report.replay = r;
+    report.figures.replay = { samples: r.samples };
+    let timer = null;
+    play.addEventListener('click', () => {
+      if (timer) { clearInterval(timer); timer = null; play.textContent = 'play'; return; }
+      play.textContent = 'pause';
+      timer = setInterval(() => {
+        const i = Number(slider.value) + Math.max(1, Math.round(r.samples / 600));
+        if (i >= r.samples) { clearInterval(timer); timer = null; play.textContent = 'play'; return; }
+        r.setIndex(i);
+      }, 40);
+    });
+  });
+}
+
+// ---- other experiments ----------------------------------------------------------------------
+
+function lrfBias() {
+  const L = csv['lrf_bias_points.csv'];
+  if (!L) return;
+  const s = section('fig7', 'Fig. 7: floor scans below the laser (short-range bias)',
+    'Stationary scans of a flat floor from three heights; a flat floor would read as a straight line. The bump below the scanner is the UTM-30LX\'s short-range bias ' +
+    '(the paper: about 3 cm at 0.4 m).');
+  const heights = [...new Set(L.col.height_m)];
+  const traces = heights.map((h) => {
+    const x = [], z = [];
+    for (let r = 0; r < L.rows; r++) if (L.col.height_m[r] === h) { x.push(L.col.x_m[r]); z.push(L.col.z_m[r]); }
+    return { x, y: z, mode: 'markers', type: 'scattergl', name: `${h} m`, marker: { size: 2 } };
+  });
+  plot(s, 'fig7-plot', traces, { height: 460, xaxis: { title: { text: 'along the floor [m]' } }, yaxis: { title: { text: 'measured floor height [m]' } } },
+    { points: L.rows });
+}
+
+function hist(parent, id, values, title, xlabel, extra = {}) {
+  return plot(parent, id, [{ x: values, type: 'histogram', name: title, marker: { color: '#2457a6' } }],
+    { height: 300, title: { text: title }, xaxis: { title: { text: xlabel } }, yaxis: { title: { text: 'count' } }, showlegend: false, ...extra }, { points: values.length });
+}
+
+function basePlanning() {
+  const C = csv['base_planning_cases.csv'];
+  if (!C) return;
+  const s = section('base-planning', 'Base planning (STOMP): success and plan time', `${C.rows} seeded start/goal pairs (base_planning_cases.csv).`);
+  const row = el('div', { class: 'row' });
+  s.append(row);
+  hist(row, 'bp-status', C.col.status, 'outcome', 'status');
+  hist(row, 'bp-time', C.col.plan_ms, 'plan time', 'ms');
+  const P = csv['base_planning_plans.csv'];
+  if (P) {
+    const s2 = section('base-plans', 'Some plans drawn in the site', 'The first plans of base_planning_cases.csv (poses of the trajectory; start o, goal x).');
+    const traces = [];
+    if (data.scene && data.scene.site) traces.push(siteShapes(data.scene.site));
+    const ids = [...new Set(P.col.case)];
+    for (const id of ids) {
+      const x = [], y = [];
+      for (let r = 0; r < P.rows; r++) if (P.col.case[r] === id) { x.push(P.col.x[r]); y.push(P.col.y[r]); }
+      traces.push({ x, y, mode: 'lines', name: `case ${id} (${C.col.status[id]})` });
+    }
+    plot(s2, 'bp-plans', traces, { height: 560, xaxis: { title: { text: 'x [m]' } }, yaxis: { title: { text: 'y [m]' }, scaleanchor: 'x' } }, { plans: ids.length });
+  }
+}
+
+function armPlanning() {
+  const C = csv['arm_planning_cases.csv'];
+  if (!C) return;
+  const s = section('arm-planning', 'Arm planning (iLQG): iterations and time',
+    `${C.rows} seeded motions (arm_planning_cases.csv). The paper: fewer than ${PAPER.ilqg_iterations} iterations and under ${PAPER.ilqg_seconds} s.`);
+  const row = el('div', { class: 'row' });
+  s.append(row);
+  hist(row, 'ap-iterations', C.col.iterations, 'iterations', 'iterations');
+  hist(row, 'ap-time', C.col.plan_ms, 'plan time', 'ms');
+}
+
+function consistency(file, id, title, keys, paperStd, units, caption) {
+  const C = csv[file];
+  if (!C) return;
+  const s = section(id, title, caption);
+  const t = el('table', { class: 'results' });
+  t.append(el('tr', {}, el('th', {}, ''), ...keys.map((k) => el('th', {}, k))));
+  const st = keys.map((k) => stats(C.col[k]));
+  const fmt = (v, i) => (units[i] === 'mm' ? v.toFixed(2) : v.toFixed(3));
+  t.append(el('tr', {}, el('td', {}, 'mean'), ...st.map((x, i) => el('td', {}, fmt(x.mean, i)))));
+  t.append(el('tr', {}, el('td', {}, 'std (ifab)'), ...st.map((x, i) => el('td', {}, fmt(x.std, i)))));
+  t.append(el('tr', {}, el('td', {}, 'std (paper)'), ...paperStd.map((x) => el('td', { class: 'paper' }, String(x)))));
+  s.append(t);
+  const traces = keys.map((k, i) => ({ y: C.col[k].map((v) => v - st[i].mean), type: 'box', name: `${k}`, boxpoints: 'all', yaxis: units[i] === 'mm' ? 'y' : 'y2' }));
+  plot(s, `${id}-plot`, traces, { height: 360, yaxis: { title: { text: 'deviation from mean [mm]' } }, yaxis2: { overlaying: 'y', side: 'right', title: { text: 'deviation [deg]' } } }, { rows: C.rows });
+}
+
+function registrationConsistency() {
+  const C = csv['registration_scans.csv'];
+  if (!C) return;
+  const conv = { ...C, col: { ...C.col } };
+  for (const k of ['x_m', 'y_m', 'z_m']) conv.col[k.replace('_m', '_mm')] = C.col[k].map((v) => 1000 * v);
+  csv['registration_scans.csv'] = conv;
+  consistency('registration_scans.csv', 'table1', 'Table I: registration consistency', ['x_mm', 'y_mm', 'z_mm', 'roll_deg', 'pitch_deg', 'yaw_deg'],
+    PAPER.table1_std, ['mm', 'mm', 'mm', 'deg', 'deg', 'deg'], 'The registered brick\'s pose from each scan (registration_scans.csv), its std beside the paper\'s.');
+}
+
+function calibrationConsistency() {
+  consistency('calibration_datasets.csv', 'table2', 'Table II: extrinsic calibration consistency', ['x_mm', 'y_mm', 'z_mm', 'roll_deg', 'pitch_deg', 'yaw_deg'],
+    PAPER.table2_std, ['mm', 'mm', 'mm', 'deg', 'deg', 'deg'], 'The arm laser\'s mount from each data set (calibration_datasets.csv), its std beside the paper\'s.');
+}
+
+function estimate() {
+  const T = csv['trajectory.csv'];
+  if (!T) return;
+  const R = csv['relations.csv'];
+  const s = section('estimate', 'Base state estimator on a recorded log', `${T.rows} scans; ${data.metrics?.log ?? ''}`);
+  const traces = [{ x: T.col.x, y: T.col.y, mode: 'lines', name: 'estimated trajectory', line: { color: '#1f77b4', width: 1 } }];
+  if (R) {
+    // Each relation drawn at the estimated pose of its first scan, coloured by its error.
+    const idx = (t) => { let lo = 0, hi = T.rows - 1; while (lo < hi) { const m = (lo + hi) >> 1; if (T.col.t[m] < t) lo = m + 1; else hi = m; } return lo; };
+    const x = [], y = [], e = [];
+    for (let r = 0; r < R.rows; r++) { const i = idx(R.col.t1[r]); x.push(T.col.x[i]); y.push(T.col.y[i]); e.push(R.col.translation_error_m[r]); }
+    traces.push({ x, y, mode: 'markers', type: 'scattergl', name: 'relation error [m]', marker: { size: 4, color: e, colorscale: 'Hot', reversescale: true, showscale: true } });
+  }
+  plot(s, 'estimate-trajectory', traces, { height: 560, xaxis: { title: { text: 'x [m]' } }, yaxis: { title: { text: 'y [m]' }, scaleanchor: 'x' } }, { points: T.rows });
+  if (R) {
+    const s2 = section('estimate-errors', 'Relation errors over time', 'Translation and rotation error of every reference relation (Kümmerle et al. 2009), at the relation\'s first time.');
+    plot(s2, 'estimate-errors-plot', [
+      { x: R.col.t1, y: R.col.translation_error_m, mode: 'markers', type: 'scattergl', name: 'translation [m]', marker: { size: 3 } },
+      { x: R.col.t1, y: R.col.rotation_error_deg, mode: 'markers', type: 'scattergl', name: 'rotation [deg]', yaxis: 'y2', marker: { size: 3 } },
+    ], { height: 380, xaxis: { title: { text: 'time [s]' } }, yaxis: { title: { text: 'm' } }, yaxis2: { overlaying: 'y', side: 'right', title: { text: 'deg' } } }, { relations: R.rows });
+  }
+}
+
+function maneuvers() {
+  const M = csv['maneuvers.csv'];
+  if (!M) return;
+  const s = section('maneuvers', 'Maneuvers without localization: end error and estimator drift', `${M.rows} maneuvers (maneuvers.csv).`);
+  plot(s, 'maneuvers-plot', [
+    { x: M.col.visit, y: M.col.end_error_m.map((v) => 100 * v), type: 'bar', name: 'end vs desired [cm]' },
+    { x: M.col.visit, y: M.col.drift_m.map((v) => 100 * v), type: 'bar', name: 'estimator drift [cm]' },
+  ], { barmode: 'group', height: 340, xaxis: { title: { text: 'visit' } }, yaxis: { title: { text: 'cm' } } }, { maneuvers: M.rows });
+}
+
+// --runs N: the distribution of every figure over the runs.
+function overRuns() {
+  const runs = data.runs || [];
+  if (!runs.length) return;
+  const s = section('over-runs', `Distributions over ${runs.length} runs`, 'Each figure of results.json over the runs (run_*/results.json); ifab report DIR/run_NNN draws one run\'s page.');
+  const row = el('div', { class: 'row' });
+  s.append(row);
+  const keys = Object.keys(runs[0]).filter((k) => typeof runs[0][k] === 'number' && !['seed'].includes(k));
+  keys.forEach((k, i) => hist(row, `runs-${i}`, runs.map((r) => r[k]).filter((v) => typeof v === 'number'), k, k, { height: 260 }));
+  report.figures['over-runs'] = { runs: runs.length, figures: keys.length };
+}
+
+function leftOut() {
+  if (!(data.left_out || []).length) return;
+  main.append(el('p', { class: 'note' }, `Left out of the page (too large): ${data.left_out.join(', ')}`));
+}
+
+async function draw() {
+  try {
+    header();
+    resultsTable();
+    overRuns();
+    brickStack();
+    maneuvers();
+    lrfBias();
+    basePlanning();
+    armPlanning();
+    registrationConsistency();
+    calibrationConsistency();
+    estimate();
+    leftOut();
+    main.append(el('p', { class: 'note' }, 'Drawn by ifab from the run folder; clouds are decimated for display (the PLY files keep every point).'));
+    report.timings = [Math.round(performance.now() - report.scriptStart)];
+    for (const f of pending) {
+      const t0 = performance.now();
+      await f();
+      report.timings.push(Math.round(performance.now() - t0));
+    }
+  } catch (e) {
+    report.errors.push(String(e && e.stack || e));
+    console.error(e);
+  }
+  report.ready = true;
+  report.loadMs = performance.now();
+}
+draw();
