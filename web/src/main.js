@@ -2,14 +2,17 @@
 // element #ifab-data: results.json, the results table, CSV texts, scene.json, decimated clouds)
 // into report.html; everything drawn here comes from that data. window.ifabReport tells a test
 // (tests/browser) what was drawn and when the page is ready.
-import Plotly from 'plotly.js-dist-min';
 import css from './style.css';
+import uplotCss from 'uplot/dist/uPlot.min.css';
+import { xyChart, seriesChart, histogram, registry, drawnCounts } from './charts.js';
 import { parseCsv, stats } from './csv.js';
 import { createReplay } from './replay.js';
 import { createViewer, boxMesh, mat4 } from './viewer.js';
 import { PAPER } from './paper.js';
 
-const report = { ready: false, figures: {}, errors: [], replay: null, scriptStart: performance.now() };
+const report = { ready: false, figures: {}, errors: [], replay: null, charts: registry, scriptStart: performance.now() };
+// What each chart drew, per series (label, points): read from the charts themselves.
+report.drawn = () => Object.fromEntries(Object.entries(registry).map(([id, u]) => [id, drawnCounts(u)]));
 window.ifabReport = report;
 
 const data = JSON.parse(document.getElementById('ifab-data').textContent);
@@ -17,7 +20,7 @@ const csv = {};
 for (const [name, text] of Object.entries(data.csv || {})) csv[name] = parseCsv(text);
 const app = document.getElementById('app');
 const style = document.createElement('style');
-style.textContent = css;
+style.textContent = uplotCss + css;
 document.head.appendChild(style);
 
 const el = (tag, attrs = {}, ...kids) => {
@@ -41,16 +44,12 @@ function section(id, title, caption) {
   return s;
 }
 
-const layoutBase = { margin: { l: 55, r: 15, t: 30, b: 45 }, font: { size: 12 }, legend: { orientation: 'h', y: -0.18 } };
-// A Plotly figure; `what` records what it holds for the test (points per trace).
-function plot(parent, id, traces, layout, what = {}) {
-  const div = el('div', { class: 'plot', id });
-  parent.append(div);
-  pending.push(async () => {
-    await Plotly.newPlot(div, traces, { ...layoutBase, ...layout }, { responsive: true, displaylogo: false });
-    report.figures[id] = { traces: traces.map((t) => t.name), ...what };
-  });
-  return div;
+// A chart drawn after the page's text is up (in order, each after the previous one).
+function chart(parent, draw) {
+  const holder = el('div', { class: 'plot' });
+  parent.append(holder);
+  pending.push(async () => { draw(holder); });
+  return holder;
 }
 const count = (a) => a.filter((v) => v !== null && v !== undefined).length;
 // Per-group polylines joined into one trace, separated by nulls (no line across groups).
@@ -63,20 +62,19 @@ function joinGroups(groupCol, cols, table) {
   return out;
 }
 
-// Footprints of the site's walls and obstacles as closed polylines for 2D plots.
-function siteShapes(site) {
+// Footprints of the site's walls and obstacles as one closed polyline series for x-y charts.
+function siteSeries(site) {
   const xs = [], ys = [];
   for (const b of [...(site.walls || []), ...(site.obstacles || [])]) {
     const m = b.pose;  // column-major 4x4
-    const corner = (sx, sy) => [m[12] + m[0] * sx + m[4] * sy, m[13] + m[1] * sx + m[5] * sy];
     const h = [b.size[0] / 2, b.size[1] / 2];
     for (const [a, c] of [[-1, -1], [1, -1], [1, 1], [-1, 1], [-1, -1]]) {
-      const p = corner(a * h[0], c * h[1]);
-      xs.push(p[0]); ys.push(p[1]);
+      xs.push(m[12] + m[0] * a * h[0] + m[4] * c * h[1]);
+      ys.push(m[13] + m[1] * a * h[0] + m[5] * c * h[1]);
     }
     xs.push(null); ys.push(null);
   }
-  return { x: xs, y: ys, mode: 'lines', name: 'walls, obstacles', line: { color: '#8a939c' }, fill: 'toself', fillcolor: 'rgba(160,168,176,0.35)' };
+  return { label: 'walls, obstacles', x: xs, y: ys, color: '#8a939c' };
 }
 
 function header() {
@@ -231,20 +229,16 @@ function fig4(visit) {
   const before = bricksBefore(visit);
   const m = data.scene.designed_bricks[before[before.length - 1]];
   const size = data.scene.site.brick;
-  // In the brick frame (columns 0-2 of m are its axes).
   const groups = { 0: [[], []], 1: [[], []], other: [[], []] };
-  let near = 0;
   for (let i = 0; i < pts.n; i++) {
     const d = [pts.x[i] - m[12], pts.y[i] - m[13], pts.z[i] - m[14]];
     const bx = d[0] * m[0] + d[1] * m[1] + d[2] * m[2];
     const by = d[0] * m[4] + d[1] * m[5] + d[2] * m[6];
     const bz = d[0] * m[8] + d[1] * m[9] + d[2] * m[10];
     if (Math.abs(bx) > size[0] / 2 || Math.abs(by) > 0.3 || bz < -0.3) continue;
-    near++;
     const g = c.label[i] === 0 ? groups[0] : c.label[i] === 1 ? groups[1] : groups.other;
     g[0].push(by); g[1].push(bz);
   }
-  const rect = { type: 'rect', x0: -size[1] / 2, x1: size[1] / 2, y0: -size[2] / 2, y1: size[2] / 2, line: { color: '#d62728' } };
   const counts = c.label_counts || {};
   const s = section('fig4', 'Fig. 4: shadow points, before and after removal',
     `Visit ${visit}: the points within the top brick's length, seen along it (brick frame; the brick in red). ` +
@@ -252,64 +246,58 @@ function fig4(visit) {
     'and gave them zero error; right: what it fitted.');
   const row = el('div', { class: 'row' });
   s.append(row);
-  const lay = (t) => ({ title: { text: t }, xaxis: { title: { text: 'across the brick [m]' } }, yaxis: { title: { text: 'up [m]' }, scaleanchor: 'x' }, shapes: [rect], height: 420 });
-  const inl = { x: groups[0][0], y: groups[0][1], mode: 'markers', type: 'scatter', name: 'fitted', marker: { size: 3, color: '#1f77b4' } };
-  const sh = { x: groups[1][0], y: groups[1][1], mode: 'markers', type: 'scatter', name: 'shadow points', marker: { size: 4, color: '#ff7f0e' } };
-  const ot = { x: groups.other[0], y: groups.other[1], mode: 'markers', type: 'scatter', name: 'other zero-error (outlier, grazing, fixed)', marker: { size: 3, color: '#b0b7be' } };
-  plot(row, 'fig4-before', [inl, sh, ot], lay('before removal'), { points: near, shadow: groups[1][0].length });
-  plot(row, 'fig4-after', [inl, ot], lay('after removal'), { points: near - groups[1][0].length });
+  const hy = size[1] / 2, hz = size[2] / 2;
+  const brick = { label: 'brick', x: [-hy, hy, hy, -hy, -hy], y: [-hz, -hz, hz, hz, -hz], color: '#d62728' };
+  const fitted = { label: 'fitted', x: groups[0][0], y: groups[0][1], line: false, points: true, markerSize: 3, color: '#1f77b4' };
+  const shadow = { label: 'shadow points', x: groups[1][0], y: groups[1][1], line: false, points: true, markerSize: 4, color: '#ff7f0e' };
+  const other = { label: 'other zero-error (outlier, grazing, fixed)', x: groups.other[0], y: groups.other[1], line: false, points: true, markerSize: 3, color: '#b0b7be' };
+  const o = (title) => ({ title, xlabel: 'across the brick [m]', ylabel: 'up [m]', height: 400, equal: true });
+  chart(row, (h) => xyChart(h, 'fig4-before', [brick, fitted, shadow, other], o('before removal')));
+  chart(row, (h) => xyChart(h, 'fig4-after', [brick, fitted, other], o('after removal')));
 }
+
+const isLocalized = (v) => v === 1 || v === 'true' || v === true;
 
 function fig6() {
   const P = csv['trajectory_planned.csv'], E = csv['trajectory_estimated.csv'], T = csv['trajectory_true.csv'], V = csv['visits.csv'];
   if (!E || !T) return;
   const s = section('fig6', 'Fig. 6: planned, estimated and true base trajectories',
     'Every maneuver between building positions: the planner\'s trajectory, the estimator\'s poses while driving (eq. 1-3) and the simulator\'s true pose; ' +
-    'a step marks each localization (from the estimate at the end of the maneuver to the registered pose).');
-  const traces = [];
-  if (data.scene && data.scene.site) traces.push(siteShapes(data.scene.site));
-  const what = {};
-  if (P) {
-    const [x, y] = joinGroups('visit', ['x', 'y'], P);
-    traces.push({ x, y, mode: 'lines', name: 'planned', line: { dash: 'dash', color: '#2ca02c' } });
-    what.planned = count(x);
-  }
-  { const [x, y] = joinGroups('visit', ['x', 'y'], E);
-    traces.push({ x, y, mode: 'lines', name: 'estimated', line: { color: '#1f77b4' } });
-    what.estimated = count(x); }
-  traces.push({ x: T.col.x, y: T.col.y, mode: 'lines', name: 'true', line: { color: '#111', width: 1 } });
-  what.true = count(T.col.x);
+    'a red step marks each localization (from the estimate at the end of the maneuver to the registered pose). Drag to zoom, double-click to reset.');
+  const series = [];
+  if (data.scene && data.scene.site) series.push(siteSeries(data.scene.site));
+  if (P) { const [x, y] = joinGroups('visit', ['x', 'y'], P); series.push({ label: 'planned', x, y, color: '#2ca02c', dash: [6, 4] }); }
+  { const [x, y] = joinGroups('visit', ['x', 'y'], E); series.push({ label: 'estimated', x, y, color: '#1f77b4' }); }
+  series.push({ label: 'true', x: T.col.x, y: T.col.y, color: '#111111', width: 1 });
   if (V && V.col.loc_x) {
     const x = [], y = [];
-    let steps = 0;
     for (let r = 0; r < V.rows; r++) {
-      if (!(V.col.localized[r] === 1 || V.col.localized[r] === 'true')) continue;
-      x.push(V.col.end_x[r], V.col.loc_x[r], null); y.push(V.col.end_y[r], V.col.loc_y[r], null); steps++;
+      if (!isLocalized(V.col.localized[r])) continue;
+      x.push(V.col.end_x[r], V.col.loc_x[r], null); y.push(V.col.end_y[r], V.col.loc_y[r], null);
     }
-    traces.push({ x, y, mode: 'lines+markers', name: 'localization step', line: { color: '#d62728', width: 2 }, marker: { size: 5 } });
-    what.steps = steps;
+    series.push({ label: 'localization step', x, y, color: '#d62728', width: 2.5, points: true, markerSize: 5 });
   }
   if (data.scene && data.scene.positions) {
     const ps = data.scene.positions;
-    traces.push({ x: ps.map((p) => p.x), y: ps.map((p) => p.y), text: ps.map((p) => p.name), mode: 'markers+text', textposition: 'top center',
-      name: 'building positions', marker: { symbol: 'x', size: 9, color: '#9467bd' } });
+    series.push({ label: 'building positions', x: ps.map((p) => p.x), y: ps.map((p) => p.y), line: false, points: true, markerSize: 9, color: '#9467bd' });
   }
-  plot(s, 'fig6-plot', traces, { height: 620, xaxis: { title: { text: 'x [m]' } }, yaxis: { title: { text: 'y [m]' }, scaleanchor: 'x' } }, what);
+  chart(s, (h) => xyChart(h, 'fig6-plot', series, { xlabel: 'x [m]', ylabel: 'y [m]', height: 620, equal: true }));
   // Per maneuver: the localization correction.
   if (V && V.col.loc_x) {
     const vx = [], dm = [], dd = [];
     for (let r = 0; r < V.rows; r++) {
-      if (!(V.col.localized[r] === 1 || V.col.localized[r] === 'true')) continue;
+      if (!isLocalized(V.col.localized[r])) continue;
       vx.push(V.col.visit[r]);
       dm.push(100 * Math.hypot(V.col.loc_x[r] - V.col.end_x[r], V.col.loc_y[r] - V.col.end_y[r]));
-      let a = V.col.loc_theta[r] - V.col.end_theta[r];
-      a = Math.atan2(Math.sin(a), Math.cos(a));
-      dd.push(Math.abs(a) * 180 / Math.PI);
+      const a = V.col.loc_theta[r] - V.col.end_theta[r];
+      dd.push(Math.abs(Math.atan2(Math.sin(a), Math.cos(a))) * 180 / Math.PI);
     }
-    plot(s, 'fig6-steps', [{ x: vx, y: dm, type: 'bar', name: 'correction [cm]' }, { x: vx, y: dd, type: 'bar', name: 'correction [deg]', yaxis: 'y2' },
-      { x: [Math.min(...vx), Math.max(...vx)], y: [PAPER.localization_cm, PAPER.localization_cm], mode: 'lines', name: 'paper mean [cm]', line: { dash: 'dot', color: '#8a3b12' } }],
-    { height: 320, barmode: 'group', xaxis: { title: { text: 'visit' } }, yaxis: { title: { text: 'cm' } }, yaxis2: { overlaying: 'y', side: 'right', title: { text: 'deg' } } },
-    { visits: vx.length });
+    if (vx.length) {
+      chart(s, (h) => seriesChart(h, 'fig6-steps', vx, [
+        { label: 'correction [cm]', y: dm, kind: 'dots' }, { label: 'correction [deg]', y: dd, kind: 'dots' },
+        { label: `paper mean [cm] (${PAPER.localization_cm})`, y: vx.map(() => PAPER.localization_cm), kind: 'line', dash: [3, 3], color: '#8a3b12' },
+      ], { title: 'localization correction per visit', xlabel: 'visit', ylabel: 'cm / deg' }));
+    }
   }
 }
 
@@ -320,23 +308,34 @@ function brickErrors() {
     'Signed error of every placed brick against its designed pose, along its long and short faces, and away from the side the robot placed it from ' +
     `(the paper's range-bias effect). Dotted: the paper's mean errors (long ${PAPER.brick_long_mm} mm, short ${PAPER.brick_short_mm} mm); dashed: the 1 mm target.`);
   const k = B.col.brick.map((b) => b + 1);
-  const n = B.rows;
-  const line = (y, name, dash, color) => ({ x: [0.5, n + 0.5], y: [y, y], mode: 'lines', name, line: { dash, color, width: 1 }, showlegend: !!name, hoverinfo: 'skip' });
-  plot(s, 'bricks-plot', [
-    { x: k, y: B.col.error_long_mm, type: 'bar', name: 'long face [mm]' },
-    { x: k, y: B.col.error_short_mm, type: 'bar', name: 'short face [mm]' },
-    { x: k, y: B.col.error_away_mm, type: 'bar', name: 'away from the robot [mm]' },
-    line(PAPER.brick_long_mm, 'paper mean, long', 'dot', '#1f77b4'), line(-PAPER.brick_long_mm, '', 'dot', '#1f77b4'),
-    line(PAPER.brick_short_mm, 'paper mean, short', 'dot', '#ff7f0e'), line(-PAPER.brick_short_mm, '', 'dot', '#ff7f0e'),
-    line(1, '1 mm target', 'dash', '#555'), line(-1, '', 'dash', '#555'),
-  ], { barmode: 'group', height: 380, xaxis: { title: { text: 'brick (bottom to top)' } }, yaxis: { title: { text: 'error [mm]' } } }, { bricks: n });
-  // Per building position (where the robot stood when it placed the brick).
+  const flat = (v) => k.map(() => v);
+  chart(s, (h) => seriesChart(h, 'bricks-plot', k, [
+    { label: 'long face [mm]', y: B.col.error_long_mm, kind: 'dots', color: '#1f77b4' },
+    { label: 'short face [mm]', y: B.col.error_short_mm, kind: 'dots', color: '#ff7f0e' },
+    { label: 'away from the robot [mm]', y: B.col.error_away_mm, kind: 'dots', color: '#2ca02c' },
+    { label: `paper mean, long (±${PAPER.brick_long_mm})`, y: flat(PAPER.brick_long_mm), kind: 'line', dash: [2, 3], color: '#1f77b4', width: 1 },
+    { label: '(−)', y: flat(-PAPER.brick_long_mm), kind: 'line', dash: [2, 3], color: '#1f77b4', width: 1 },
+    { label: `paper mean, short (±${PAPER.brick_short_mm})`, y: flat(PAPER.brick_short_mm), kind: 'line', dash: [2, 3], color: '#ff7f0e', width: 1 },
+    { label: '(−)', y: flat(-PAPER.brick_short_mm), kind: 'line', dash: [2, 3], color: '#ff7f0e', width: 1 },
+    { label: '1 mm target', y: flat(1), kind: 'line', dash: [6, 4], color: '#555555', width: 1 },
+    { label: '(−)', y: flat(-1), kind: 'line', dash: [6, 4], color: '#555555', width: 1 },
+  ], { xlabel: 'brick (bottom to top)', ylabel: 'error [mm]', height: 380 }));
+  // Per building position (where the robot stood when it placed the brick): each brick a dot.
   if (data.scene && data.scene.visits) {
-    const pos = new Array(n).fill('?');
+    const pos = new Array(B.rows).fill('?');
     for (const v of data.scene.visits) for (const b of v.bricks_placed) pos[b] = v.position;
-    const box = (col, name) => ({ y: B.col[col], x: pos, type: 'box', name, boxpoints: 'all', jitter: 0.4, pointpos: 0 });
-    plot(s, 'bricks-by-position', [box('error_long_mm', 'long face'), box('error_short_mm', 'short face'), box('error_away_mm', 'away from the robot')],
-      { boxmode: 'group', height: 380, xaxis: { title: { text: 'building position' } }, yaxis: { title: { text: 'error [mm]' } } }, { bricks: n });
+    const names = [...new Set(pos)];
+    const mk = (col, off, label, c) => ({ label, x: pos.map((p, i) => names.indexOf(p) + off + 0.04 * ((i % 5) - 2)), y: B.col[col], line: false, points: true, markerSize: 6, color: c });
+    chart(s, (h) => {
+      const u = xyChart(h, 'bricks-by-position', [mk('error_long_mm', -0.25, 'long face', '#1f77b4'), mk('error_short_mm', 0, 'short face', '#ff7f0e'),
+        mk('error_away_mm', 0.25, 'away from the robot', '#2ca02c')], { xlabel: `building position: ${names.map((n, i) => `${i} ${n}`).join(', ')}`, ylabel: 'error [mm]', height: 360, extraX: [-0.6, names.length - 0.4] });
+      return u;
+    });
+    s.append(el('p', { class: 'note' }, 'Mean per building position [mm] (long / short / away): ' + names.map((n) => {
+      const idx = pos.map((p, i) => (p === n ? i : -1)).filter((i) => i >= 0);
+      const mean = (col) => (idx.reduce((a, i) => a + B.col[col][i], 0) / idx.length).toFixed(2);
+      return `${n} ${mean('error_long_mm')} / ${mean('error_short_mm')} / ${mean('error_away_mm')} (${idx.length} bricks)`;
+    }).join('; ')));
   }
 }
 
@@ -378,18 +377,16 @@ function lrfBias() {
     'Stationary scans of a flat floor from three heights; a flat floor would read as a straight line. The bump below the scanner is the UTM-30LX\'s short-range bias ' +
     '(the paper: about 3 cm at 0.4 m).');
   const heights = [...new Set(L.col.height_m)];
-  const traces = heights.map((h) => {
+  const series = heights.map((h, i) => {
     const x = [], z = [];
     for (let r = 0; r < L.rows; r++) if (L.col.height_m[r] === h) { x.push(L.col.x_m[r]); z.push(L.col.z_m[r]); }
-    return { x, y: z, mode: 'markers', type: 'scattergl', name: `${h} m`, marker: { size: 2 } };
+    return { label: `scanner at ${h} m`, x, y: z, line: false, points: true, markerSize: 2 };
   });
-  plot(s, 'fig7-plot', traces, { height: 460, xaxis: { title: { text: 'along the floor [m]' } }, yaxis: { title: { text: 'measured floor height [m]' } } },
-    { points: L.rows });
+  chart(s, (h) => xyChart(h, 'fig7-plot', series, { xlabel: 'along the floor [m]', ylabel: 'measured floor height [m]', height: 460 }));
 }
 
 function hist(parent, id, values, title, xlabel, extra = {}) {
-  return plot(parent, id, [{ x: values, type: 'histogram', name: title, marker: { color: '#2457a6' } }],
-    { height: 300, title: { text: title }, xaxis: { title: { text: xlabel } }, yaxis: { title: { text: 'count' } }, showlegend: false, ...extra }, { points: values.length });
+  return chart(parent, (h) => histogram(h, id, values, { title, xlabel, ...extra }));
 }
 
 function basePlanning() {
@@ -398,20 +395,19 @@ function basePlanning() {
   const s = section('base-planning', 'Base planning (STOMP): success and plan time', `${C.rows} seeded start/goal pairs (base_planning_cases.csv).`);
   const row = el('div', { class: 'row' });
   s.append(row);
-  hist(row, 'bp-status', C.col.status, 'outcome', 'status');
+  hist(row, 'bp-status', C.col.status, 'outcome', 'status', { categories: true });
   hist(row, 'bp-time', C.col.plan_ms, 'plan time', 'ms');
   const P = csv['base_planning_plans.csv'];
   if (P) {
-    const s2 = section('base-plans', 'Some plans drawn in the site', 'The first plans of base_planning_cases.csv (poses of the trajectory; start o, goal x).');
-    const traces = [];
-    if (data.scene && data.scene.site) traces.push(siteShapes(data.scene.site));
-    const ids = [...new Set(P.col.case)];
-    for (const id of ids) {
+    const s2 = section('base-plans', 'Some plans drawn in the site', 'The first plans of base_planning_cases.csv (the base pose along each trajectory).');
+    const series = [];
+    if (data.scene && data.scene.site) series.push(siteSeries(data.scene.site));
+    for (const id of [...new Set(P.col.case)]) {
       const x = [], y = [];
       for (let r = 0; r < P.rows; r++) if (P.col.case[r] === id) { x.push(P.col.x[r]); y.push(P.col.y[r]); }
-      traces.push({ x, y, mode: 'lines', name: `case ${id} (${C.col.status[id]})` });
+      series.push({ label: `case ${id} (${C.col.status[id]})`, x, y, width: 2 });
     }
-    plot(s2, 'bp-plans', traces, { height: 560, xaxis: { title: { text: 'x [m]' } }, yaxis: { title: { text: 'y [m]' }, scaleanchor: 'x' } }, { plans: ids.length });
+    chart(s2, (h) => xyChart(h, 'bp-plans', series, { xlabel: 'x [m]', ylabel: 'y [m]', height: 560, equal: true }));
   }
 }
 
@@ -422,13 +418,11 @@ function armPlanning() {
     `${C.rows} seeded motions (arm_planning_cases.csv). The paper: fewer than ${PAPER.ilqg_iterations} iterations and under ${PAPER.ilqg_seconds} s.`);
   const row = el('div', { class: 'row' });
   s.append(row);
-  hist(row, 'ap-iterations', C.col.iterations, 'iterations', 'iterations');
+  hist(row, 'ap-iterations', C.col.iterations, 'iterations', 'iterations', { categories: true });
   hist(row, 'ap-time', C.col.plan_ms, 'plan time', 'ms');
 }
 
-function consistency(file, id, title, keys, paperStd, units, caption) {
-  const C = csv[file];
-  if (!C) return;
+function consistency(C, id, title, keys, paperStd, units, caption) {
   const s = section(id, title, caption);
   const t = el('table', { class: 'results' });
   t.append(el('tr', {}, el('th', {}, ''), ...keys.map((k) => el('th', {}, k))));
@@ -438,8 +432,14 @@ function consistency(file, id, title, keys, paperStd, units, caption) {
   t.append(el('tr', {}, el('td', {}, 'std (ifab)'), ...st.map((x, i) => el('td', {}, fmt(x.std, i)))));
   t.append(el('tr', {}, el('td', {}, 'std (paper)'), ...paperStd.map((x) => el('td', { class: 'paper' }, String(x)))));
   s.append(t);
-  const traces = keys.map((k, i) => ({ y: C.col[k].map((v) => v - st[i].mean), type: 'box', name: `${k}`, boxpoints: 'all', yaxis: units[i] === 'mm' ? 'y' : 'y2' }));
-  plot(s, `${id}-plot`, traces, { height: 360, yaxis: { title: { text: 'deviation from mean [mm]' } }, yaxis2: { overlaying: 'y', side: 'right', title: { text: 'deviation [deg]' } } }, { rows: C.rows });
+  // Each scan's (data set's) deviation from the mean, per coordinate.
+  const x = Array.from({ length: C.rows }, (_, i) => i + 1);
+  const row = el('div', { class: 'row' });
+  s.append(row);
+  chart(row, (h) => seriesChart(h, `${id}-mm`, x, keys.filter((k, i) => units[i] === 'mm').map((k) => ({ label: k, y: C.col[k].map((v) => v - st[keys.indexOf(k)].mean), kind: 'dots' })),
+    { title: 'deviation from the mean [mm]', xlabel: 'scan / data set', ylabel: 'mm' }));
+  chart(row, (h) => seriesChart(h, `${id}-deg`, x, keys.filter((k, i) => units[i] === 'deg').map((k) => ({ label: k, y: C.col[k].map((v) => v - st[keys.indexOf(k)].mean), kind: 'dots' })),
+    { title: 'deviation from the mean [deg]', xlabel: 'scan / data set', ylabel: 'deg' }));
 }
 
 function registrationConsistency() {
@@ -447,36 +447,39 @@ function registrationConsistency() {
   if (!C) return;
   const conv = { ...C, col: { ...C.col } };
   for (const k of ['x_m', 'y_m', 'z_m']) conv.col[k.replace('_m', '_mm')] = C.col[k].map((v) => 1000 * v);
-  csv['registration_scans.csv'] = conv;
-  consistency('registration_scans.csv', 'table1', 'Table I: registration consistency', ['x_mm', 'y_mm', 'z_mm', 'roll_deg', 'pitch_deg', 'yaw_deg'],
+  consistency(conv, 'table1', 'Table I: registration consistency', ['x_mm', 'y_mm', 'z_mm', 'roll_deg', 'pitch_deg', 'yaw_deg'],
     PAPER.table1_std, ['mm', 'mm', 'mm', 'deg', 'deg', 'deg'], 'The registered brick\'s pose from each scan (registration_scans.csv), its std beside the paper\'s.');
 }
 
 function calibrationConsistency() {
-  consistency('calibration_datasets.csv', 'table2', 'Table II: extrinsic calibration consistency', ['x_mm', 'y_mm', 'z_mm', 'roll_deg', 'pitch_deg', 'yaw_deg'],
+  const C = csv['calibration_datasets.csv'];
+  if (!C) return;
+  consistency(C, 'table2', 'Table II: extrinsic calibration consistency', ['x_mm', 'y_mm', 'z_mm', 'roll_deg', 'pitch_deg', 'yaw_deg'],
     PAPER.table2_std, ['mm', 'mm', 'mm', 'deg', 'deg', 'deg'], 'The arm laser\'s mount from each data set (calibration_datasets.csv), its std beside the paper\'s.');
 }
 
 function estimate() {
   const T = csv['trajectory.csv'];
-  if (!T) return;
+  if (!T || data.experiment !== 'estimate') return;
   const R = csv['relations.csv'];
-  const s = section('estimate', 'Base state estimator on a recorded log', `${T.rows} scans; ${data.metrics?.log ?? ''}`);
-  const traces = [{ x: T.col.x, y: T.col.y, mode: 'lines', name: 'estimated trajectory', line: { color: '#1f77b4', width: 1 } }];
+  const s = section('estimate', 'Base state estimator on a recorded log', `${T.rows} scans of ${data.metrics?.log ?? 'the log'}; relations: ${data.metrics?.relations_file ?? 'none'}.`);
+  const series = [{ label: 'estimated trajectory', x: T.col.x, y: T.col.y, color: '#1f77b4', width: 1 }];
   if (R) {
-    // Each relation drawn at the estimated pose of its first scan, coloured by its error.
+    // Relations with an error above the 90th percentile, drawn at their first scan's pose.
     const idx = (t) => { let lo = 0, hi = T.rows - 1; while (lo < hi) { const m = (lo + hi) >> 1; if (T.col.t[m] < t) lo = m + 1; else hi = m; } return lo; };
-    const x = [], y = [], e = [];
-    for (let r = 0; r < R.rows; r++) { const i = idx(R.col.t1[r]); x.push(T.col.x[i]); y.push(T.col.y[i]); e.push(R.col.translation_error_m[r]); }
-    traces.push({ x, y, mode: 'markers', type: 'scattergl', name: 'relation error [m]', marker: { size: 4, color: e, colorscale: 'Hot', reversescale: true, showscale: true } });
+    const sorted = R.col.translation_error_m.slice().sort((a, b) => a - b);
+    const p90 = sorted[Math.floor(0.9 * sorted.length)] ?? 0;
+    const x = [], y = [];
+    for (let r = 0; r < R.rows; r++) if (R.col.translation_error_m[r] >= p90) { const i = idx(R.col.t1[r]); x.push(T.col.x[i]); y.push(T.col.y[i]); }
+    series.push({ label: `relations with the largest errors (>= ${p90.toFixed(3)} m)`, x, y, line: false, points: true, markerSize: 4, color: '#d62728' });
   }
-  plot(s, 'estimate-trajectory', traces, { height: 560, xaxis: { title: { text: 'x [m]' } }, yaxis: { title: { text: 'y [m]' }, scaleanchor: 'x' } }, { points: T.rows });
+  chart(s, (h) => xyChart(h, 'estimate-trajectory', series, { xlabel: 'x [m]', ylabel: 'y [m]', height: 560, equal: true }));
   if (R) {
     const s2 = section('estimate-errors', 'Relation errors over time', 'Translation and rotation error of every reference relation (Kümmerle et al. 2009), at the relation\'s first time.');
-    plot(s2, 'estimate-errors-plot', [
-      { x: R.col.t1, y: R.col.translation_error_m, mode: 'markers', type: 'scattergl', name: 'translation [m]', marker: { size: 3 } },
-      { x: R.col.t1, y: R.col.rotation_error_deg, mode: 'markers', type: 'scattergl', name: 'rotation [deg]', yaxis: 'y2', marker: { size: 3 } },
-    ], { height: 380, xaxis: { title: { text: 'time [s]' } }, yaxis: { title: { text: 'm' } }, yaxis2: { overlaying: 'y', side: 'right', title: { text: 'deg' } } }, { relations: R.rows });
+    const row = el('div', { class: 'row' });
+    s2.append(row);
+    chart(row, (h) => xyChart(h, 'estimate-errors-m', [{ label: 'translation error [m]', x: R.col.t1, y: R.col.translation_error_m, line: false, points: true, markerSize: 2 }], { xlabel: 'time [s]', ylabel: 'm', height: 320 }));
+    chart(row, (h) => xyChart(h, 'estimate-errors-deg', [{ label: 'rotation error [deg]', x: R.col.t1, y: R.col.rotation_error_deg, line: false, points: true, markerSize: 2, color: '#ff7f0e' }], { xlabel: 'time [s]', ylabel: 'deg', height: 320 }));
   }
 }
 
@@ -484,10 +487,10 @@ function maneuvers() {
   const M = csv['maneuvers.csv'];
   if (!M) return;
   const s = section('maneuvers', 'Maneuvers without localization: end error and estimator drift', `${M.rows} maneuvers (maneuvers.csv).`);
-  plot(s, 'maneuvers-plot', [
-    { x: M.col.visit, y: M.col.end_error_m.map((v) => 100 * v), type: 'bar', name: 'end vs desired [cm]' },
-    { x: M.col.visit, y: M.col.drift_m.map((v) => 100 * v), type: 'bar', name: 'estimator drift [cm]' },
-  ], { barmode: 'group', height: 340, xaxis: { title: { text: 'visit' } }, yaxis: { title: { text: 'cm' } } }, { maneuvers: M.rows });
+  chart(s, (h) => seriesChart(h, 'maneuvers-plot', M.col.visit, [
+    { label: 'end vs desired [cm]', y: M.col.end_error_m.map((v) => 100 * v), kind: 'dots' },
+    { label: 'estimator drift [cm]', y: M.col.drift_m.map((v) => 100 * v), kind: 'dots' },
+  ], { xlabel: 'visit', ylabel: 'cm', height: 340 }));
 }
 
 // --runs N: the distribution of every figure over the runs.
@@ -497,8 +500,8 @@ function overRuns() {
   const s = section('over-runs', `Distributions over ${runs.length} runs`, 'Each figure of results.json over the runs (run_*/results.json); ifab report DIR/run_NNN draws one run\'s page.');
   const row = el('div', { class: 'row' });
   s.append(row);
-  const keys = Object.keys(runs[0]).filter((k) => typeof runs[0][k] === 'number' && !['seed'].includes(k));
-  keys.forEach((k, i) => hist(row, `runs-${i}`, runs.map((r) => r[k]).filter((v) => typeof v === 'number'), k, k, { height: 260 }));
+  const keys = Object.keys(runs[0]).filter((k) => typeof runs[0][k] === 'number' && k !== 'seed');
+  keys.forEach((k, i) => hist(row, `runs-${i}`, runs.map((r) => r[k]).filter((v) => typeof v === 'number'), k, '', { bins: 10 }));
   report.figures['over-runs'] = { runs: runs.length, figures: keys.length };
 }
 

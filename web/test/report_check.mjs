@@ -60,20 +60,16 @@ export async function checkReport({ report, run, screenshot, replayShot, log = c
     const pageErrors = await page.evaluate(() => window.ifabReport.errors);
     if (pageErrors.length) fail(`the page failed to draw: ${pageErrors.join(' | ')}`);
 
-    // What each figure holds, read from the plots themselves (Plotly keeps its traces on the div).
-    const drawn = await page.evaluate(() => {
-      const out = {};
-      document.querySelectorAll('.plot').forEach((d) => {
-        out[d.id] = (d.data || []).map((t) => {
-          const a = t.type === 'box' ? t.y : t.x;
-          return { name: t.name, type: t.type || 'scatter', n: a ? Array.from(a).filter((v) => v !== null && v !== undefined).length : 0 };
-        });
-      });
-      return { plots: out, figures: window.ifabReport.figures, tableRows: document.querySelectorAll('#results table tr').length - 1 };
-    });
-    const trace = (fig, name) => (drawn.plots[fig] || []).find((t) => t.name === name);
+    // What each chart drew, per series, read back from the charts themselves (uPlot's data).
+    const drawn = await page.evaluate(() => ({
+      plots: window.ifabReport.drawn(),
+      figures: window.ifabReport.figures,
+      tableRows: document.querySelectorAll('#results table tr').length - 1,
+      canvases: Object.fromEntries([...document.querySelectorAll('.chart')].map((c) => [c.id, !!c.querySelector('canvas')])),
+    }));
+    const trace = (fig, name) => (drawn.plots[fig] || []).find((t) => t.label === name);
     const need = (fig) => {
-      if (!drawn.plots[fig]) { fail(`${fig}: figure missing`); return false; }
+      if (!drawn.plots[fig] || !drawn.canvases[fig]) { fail(`${fig}: figure missing`); return false; }
       if (drawn.plots[fig].every((t) => t.n === 0)) { fail(`${fig}: figure is empty`); return false; }
       return true;
     };
