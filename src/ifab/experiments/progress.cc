@@ -34,6 +34,7 @@ void ProgressLine::Restart() {
   std::lock_guard<std::mutex> lock(mutex_);
   start_ = std::chrono::steady_clock::now();
   fraction_ = -1.0;
+  counting_ = false;
 }
 
 std::string ProgressLine::Format(const std::string& phase, double fraction, double elapsed_s, std::size_t width) {
@@ -59,7 +60,11 @@ void ProgressLine::DrawLocked() {
 void ProgressLine::Update(const std::string& phase, double fraction) {
   std::lock_guard<std::mutex> lock(mutex_);
   phase_ = phase;
-  if (fraction >= 0.0) fraction_ = fraction;
+  if (fraction >= 0.0) {
+    if (!counting_) start_ = std::chrono::steady_clock::now();
+    counting_ = true;
+    fraction_ = fraction;
+  }
   if (!terminal_) {
     if (phase != last_logged_) std::cerr << "  " << phase << "\n";
     last_logged_ = phase;

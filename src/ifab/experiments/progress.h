@@ -15,7 +15,8 @@ class ProgressLine {
   /// The process's one progress line (stderr).
   static ProgressLine& Global();
 
-  /// Start timing anew (time left is estimated from the time since the last Restart).
+  /// Start timing anew (time left is estimated from the first Update with a fraction after it,
+  /// so a phase of unknown length before, e.g. a calibration, does not skew it).
   void Restart();
   /// The current phase; `fraction` in [0, 1] of the whole job, or negative when unknown.
   void Update(const std::string& phase, double fraction = -1.0);
@@ -39,6 +40,7 @@ class ProgressLine {
   std::string phase_, last_logged_;
   double fraction_{-1.0};
   std::chrono::steady_clock::time_point start_, last_draw_;
+  bool counting_{false};  // a fraction was given since Restart: time left counts from then
 };
 
 }  // namespace ifab::experiments

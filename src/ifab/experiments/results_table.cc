@@ -14,7 +14,7 @@ namespace {
 std::vector<std::vector<std::string>> GenericRows(const nlohmann::json& src) {
   std::vector<std::vector<std::string>> rows;
   for (const auto& [key, value] : src.items())
-    if (value.is_number()) rows.push_back({key, fmt::format("{:.4g}", value.get<double>()), ""});
+    if (value.is_number() && key != "seed") rows.push_back({key, fmt::format("{:.4g}", value.get<double>()), ""});
   return rows;
 }
 
