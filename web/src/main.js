@@ -478,8 +478,10 @@ function estimate() {
     const s2 = section('estimate-errors', 'Relation errors over time', 'Translation and rotation error of every reference relation (Kümmerle et al. 2009), at the relation\'s first time.');
     const row = el('div', { class: 'row' });
     s2.append(row);
-    chart(row, (h) => xyChart(h, 'estimate-errors-m', [{ label: 'translation error [m]', x: R.col.t1, y: R.col.translation_error_m, line: false, points: true, markerSize: 2 }], { xlabel: 'time [s]', ylabel: 'm', height: 320 }));
-    chart(row, (h) => xyChart(h, 'estimate-errors-deg', [{ label: 'rotation error [deg]', x: R.col.t1, y: R.col.rotation_error_deg, line: false, points: true, markerSize: 2, color: '#ff7f0e' }], { xlabel: 'time [s]', ylabel: 'deg', height: 320 }));
+    const t0 = T.col.t[0];
+    const t = R.col.t1.map((v) => v - t0);
+    chart(row, (h) => xyChart(h, 'estimate-errors-m', [{ label: 'translation error [m]', x: t, y: R.col.translation_error_m, line: false, points: true, markerSize: 2 }], { xlabel: 'time since the first scan [s]', ylabel: 'm', height: 320 }));
+    chart(row, (h) => xyChart(h, 'estimate-errors-deg', [{ label: 'rotation error [deg]', x: t, y: R.col.rotation_error_deg, line: false, points: true, markerSize: 2, color: '#ff7f0e' }], { xlabel: 'time since the first scan [s]', ylabel: 'deg', height: 320 }));
   }
 }
 
