@@ -350,7 +350,10 @@ function replaySection() {
   const play = el('button', { id: 'replay-play' }, 'play');
   const lab = el('span', { id: 'replay-label' });
   s.append(el('div', { class: 'controls' }, play, slider), lab, view);
-  pending.push(async () => {
+  // The replay's WebGL view is made when it comes near the screen: setting up a WebGL context
+  // is the dearest step of the page without a GPU (software rendering), and it sits at the end.
+  const make = () => {
+    if (report.replay) return;
     const r = createReplay(view, slider, lab, { scene: data.scene, replay: R, sweeps: csv['sweeps.csv'], bricks: csv['brick_errors.csv'],
       visits: data.scene.visits, clouds: data.clouds || [], visitsCsv: csv['visits.csv'] });
     report.replay = r;
@@ -365,6 +368,11 @@ function replaySection() {
         r.setIndex(i);
       }, 40);
     });
+  };
+  pending.push(async () => {
+    new IntersectionObserver((entries, obs) => {
+      if (entries.some((e) => e.isIntersecting)) { obs.disconnect(); make(); }
+    }, { rootMargin: '300px' }).observe(view);
   });
 }
 
@@ -528,11 +536,15 @@ async function draw() {
     leftOut();
     main.append(el('p', { class: 'note' }, 'Drawn by ifab from the run folder; clouds are decimated for display (the PLY files keep every point).'));
     report.timings = [Math.round(performance.now() - report.scriptStart)];
+    // Each draw, then a turn of the event loop: charts commit their drawing in a microtask.
     for (const f of pending) {
       const t0 = performance.now();
       await f();
+      await new Promise((r) => setTimeout(r, 0));
       report.timings.push(Math.round(performance.now() - t0));
     }
+    // Ready once the browser has painted a frame with everything (3D views render in a frame).
+    await new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)));
   } catch (e) {
     report.errors.push(String(e && e.stack || e));
     console.error(e);

@@ -24,12 +24,19 @@ export function createViewer(container, { position = [5.5, -6.5, 5.0], target = 
   const sun = new THREE.DirectionalLight(0xffffff, 1.4);
   sun.position.set(3, -4, 8);
   scene.add(sun);
-  let queued = false;
+  // Draw only while on screen: software WebGL (headless Chromium, no GPU) takes a good part of a
+  // second to set up and draw a view, and a view below the fold need not delay the page.
+  let queued = false, visible = false, stale = true;
   const render = () => {
-    if (queued) return;
+    stale = true;
+    if (queued || !visible) return;
     queued = true;
-    requestAnimationFrame(() => { queued = false; renderer.render(scene, camera); });
+    requestAnimationFrame(() => { queued = false; stale = false; renderer.render(scene, camera); });
   };
+  new IntersectionObserver((entries) => {
+    visible = entries.some((e) => e.isIntersecting);
+    if (visible && stale) render();
+  }).observe(container);
   const renderNow = () => renderer.render(scene, camera);
   controls.addEventListener('change', render);
   // Lit pixels (not background) and red ones of the canvas: for tests of what was drawn.

@@ -34,7 +34,9 @@ export async function checkReport({ report, run, screenshot, replayShot, log = c
   const browser = await puppeteer.launch({
     executablePath: chromiumPath(),
     headless: true,
-    args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--window-size=1400,1000'],
+    // No GPU here: WebGL on SwiftShader, the page composited in software (compositing through
+    // SwiftShader alone took 2-3 s of CPU for this page).
+    args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--disable-gpu-compositing', '--window-size=1400,1000'],
   });
   const info = { bytes: fs.statSync(report).size };
   try {
@@ -121,7 +123,14 @@ export async function checkReport({ report, run, screenshot, replayShot, log = c
       if (!trace('fig4-before', 'shadow points')) fail('fig4: no shadow points trace');
       if (!drawn.plots['fig4-after'] || trace('fig4-after', 'shadow points')) fail('fig4: the after-removal plot is missing or still shows shadow points');
     }
-    // The 3D replay: pixels drawn, and the robot moves with the slider.
+    // The 3D replay (made when scrolled to, as a person would): pixels drawn, and the robot
+    // moves with the slider.
+    const hasReplay = await page.evaluate(() => {
+      const e = document.getElementById('replay');
+      if (e) e.scrollIntoView();
+      return !!e;
+    });
+    if (hasReplay) await page.waitForFunction(() => window.ifabReport.replay, { timeout: 60000 }).catch(() => {});
     const replay = await page.evaluate(() => {
       const r = window.ifabReport.replay;
       if (!r) return null;
