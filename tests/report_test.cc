@@ -82,6 +82,7 @@ TEST(Report, InlinesTheBundleAndTheRunsDataAndKeepsScriptsClosed) {
   EXPECT_EQ(c["xyz_mm"], nlohmann::json({0, 500, -250, 3, 500, -250, 6, 500, -250, 9, 500, -250}));
   EXPECT_EQ(c["label"], nlohmann::json({0, 1, 0, 1}));
   EXPECT_EQ(c["label_counts"]["1"], 5);
+  EXPECT_EQ(c["shadow_xyz_mm"].size(), 15u);  // every shadow point, not decimated (Fig. 4)
   EXPECT_FALSE(fs::exists(dir / "report.html.tmp"));
 }
 

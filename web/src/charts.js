@@ -20,9 +20,15 @@ function polyline(u, si, i0, i1) {
     if (pen) p.lineTo(px, py); else p.moveTo(px, py);
     pen = true;
   }
-  return { stroke: p, fill: null, clip: null };
+  return { stroke: p, fill: null, clip: plotArea(u) };
 }
 const noPath = () => null;
+// The plot area, to clip what is drawn outside the axes' ranges.
+function plotArea(u) {
+  const c = new Path2D();
+  c.rect(u.bbox.left, u.bbox.top, u.bbox.width, u.bbox.height);
+  return c;
+}
 
 function markers(u, si, i0, i1) {
   const s = u.series[si];
@@ -30,6 +36,7 @@ function markers(u, si, i0, i1) {
   const r = (s.markerSize || 4) * devicePixelRatio / 2;
   const ctx = u.ctx;
   ctx.save();
+  ctx.clip(plotArea(u));
   ctx.fillStyle = s.markerColor || s._stroke || '#333';
   ctx.beginPath();
   for (let i = i0; i <= i1; i++) {
@@ -63,7 +70,9 @@ function frame(parent, id, title, caption) {
 export function xyChart(parent, id, series, { title = '', xlabel = '', ylabel = '', height = 420, equal = false, extraX = [], extraY = [] } = {}) {
   const div = frame(parent, id);
   const width = Math.max(320, div.clientWidth || parent.clientWidth || 800);
-  let xr = range(series.flatMap((s) => s.x).concat(extraX)), yr = range(series.flatMap((s) => s.y).concat(extraY));
+  // The axes fit the series not marked noRange (e.g. the site's walls around a trajectory).
+  const fit = series.filter((s) => !s.noRange);
+  let xr = range(fit.flatMap((s) => s.x).concat(extraX)), yr = range(fit.flatMap((s) => s.y).concat(extraY));
   if (equal) {
     // Equal scales: widen the shorter range to the plot's aspect.
     const plotW = width - 80, plotH = height - 90;

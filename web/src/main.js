@@ -74,7 +74,7 @@ function siteSeries(site) {
     }
     xs.push(null); ys.push(null);
   }
-  return { label: 'walls, obstacles', x: xs, y: ys, color: '#8a939c' };
+  return { label: 'walls, obstacles', x: xs, y: ys, color: '#8a939c', noRange: true };
 }
 
 function header() {
@@ -207,14 +207,18 @@ function brickStack() {
     const view = el('div', { id: 'fig3-view', class: 'view3d' });
     s.append(view);
     if (visits.length) {
+      const first = visits[visits.length - 1];  // the last: the stack at its highest
+      sel.value = String(first);
       pending.push(async () => {
         const f = fig3View(view);
-        f.show(visits[0]);
+        f.show(first);
         report.fig3 = f;
         sel.addEventListener('change', () => f.show(Number(sel.value)));
       });
     }
-    fig4(visits[visits.length - 1]);
+    // Fig. 4 on the sweep with the most shadow points (the figure is about them).
+    const shadows = (v) => Number((cloudOf(v).label_counts || {})['1'] || 0);
+    if (visits.length) fig4(visits.reduce((a, b) => (shadows(b) > shadows(a) ? b : a)));
   }
   fig6();
   brickErrors();
@@ -230,18 +234,23 @@ function fig4(visit) {
   const m = data.scene.designed_bricks[before[before.length - 1]];
   const size = data.scene.site.brick;
   const groups = { 0: [[], []], 1: [[], []], other: [[], []] };
-  for (let i = 0; i < pts.n; i++) {
-    const d = [pts.x[i] - m[12], pts.y[i] - m[13], pts.z[i] - m[14]];
+  const add = (g, x, y, z) => {
+    const d = [x - m[12], y - m[13], z - m[14]];
     const bx = d[0] * m[0] + d[1] * m[1] + d[2] * m[2];
     const by = d[0] * m[4] + d[1] * m[5] + d[2] * m[6];
     const bz = d[0] * m[8] + d[1] * m[9] + d[2] * m[10];
-    if (Math.abs(bx) > size[0] / 2 || Math.abs(by) > 0.3 || bz < -0.3) continue;
-    const g = c.label[i] === 0 ? groups[0] : c.label[i] === 1 ? groups[1] : groups.other;
+    if (Math.abs(bx) > size[0] / 2 || Math.abs(by) > 0.3 || bz < -0.3) return;
     g[0].push(by); g[1].push(bz);
+  };
+  // The decimated cloud for the rest, every shadow point of the full cloud.
+  for (let i = 0; i < pts.n; i++) if (c.label[i] !== 1) add(c.label[i] === 0 ? groups[0] : groups.other, pts.x[i], pts.y[i], pts.z[i]);
+  if (c.shadow_xyz_mm) {
+    const sh = toSite({ xyz_mm: c.shadow_xyz_mm }, cloudPose(visit));
+    for (let i = 0; i < sh.n; i++) add(groups[1], sh.x[i], sh.y[i], sh.z[i]);
   }
   const counts = c.label_counts || {};
   const s = section('fig4', 'Fig. 4: shadow points, before and after removal',
-    `Visit ${visit}: the points within the top brick's length, seen along it (brick frame; the brick in red). ` +
+    `Visit ${visit}: the points within the top brick's length, seen along it (brick frame; the brick in red; every shadow point, every ${c.stride}th of the others). ` +
     `The registration flagged ${counts['1'] || 0} of ${c.points} points as shadow points (a ray past an edge, far from the model) ` +
     'and gave them zero error; right: what it fitted.');
   const row = el('div', { class: 'row' });

@@ -60,10 +60,17 @@ nlohmann::json DecimatedCloud(const fs::path& path, int max_points) {
   nlohmann::json j = {{"file", path.filename().string()}, {"points", n}, {"stride", stride}, {"xyz_mm", xyz}};
   if (label) {
     j["label"] = labels;
-    // Counts over the full cloud, so the page can state them without the decimation.
-    nlohmann::json counts = nlohmann::json::object();
-    for (double v : label->values) counts[std::to_string(static_cast<int>(v))] = counts.value(std::to_string(static_cast<int>(v)), 0) + 1;
+    // Counts over the full cloud, so the page can state them without the decimation, and every
+    // shadow point (label 1): few, and what Fig. 4 is about.
+    nlohmann::json counts = nlohmann::json::object(), shadow = nlohmann::json::array();
+    for (std::size_t i = 0; i < n; ++i) {
+      const int l = static_cast<int>(label->values[i]);
+      counts[std::to_string(l)] = counts.value(std::to_string(l), 0) + 1;
+      if (l == 1)
+        for (int a = 0; a < 3; ++a) shadow.push_back(static_cast<int>(std::lround(1000.0 * cloud.points[i][a])));
+    }
     j["label_counts"] = counts;
+    j["shadow_xyz_mm"] = shadow;
   }
   return j;
 }
