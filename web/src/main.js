@@ -519,8 +519,15 @@ function overRuns() {
   const s = section('over-runs', `Distributions over ${runs.length} runs`, 'Each figure of results.json over the runs (run_*/results.json); ifab report DIR/run_NNN draws one run\'s page.');
   const row = el('div', { class: 'row' });
   s.append(row);
-  const keys = Object.keys(runs[0]).filter((k) => typeof runs[0][k] === 'number' && k !== 'seed');
-  keys.forEach((k, i) => hist(row, `runs-${i}`, runs.map((r) => r[k]).filter((v) => typeof v === 'number'), k, '', { bins: 10 }));
+  // Every number of a run's results.json, and every element of a list of numbers (key[i]).
+  const figures = [];
+  for (const [k, v] of Object.entries(runs[0])) {
+    if (k === 'seed') continue;
+    if (typeof v === 'number') figures.push([k, (r) => r[k]]);
+    else if (Array.isArray(v) && v.every((x) => typeof x === 'number')) v.forEach((_, i) => figures.push([`${k}[${i}]`, (r) => (r[k] || [])[i]]));
+  }
+  const keys = figures.map((f) => f[0]);
+  figures.forEach(([k, get], i) => hist(row, `runs-${i}`, runs.map(get).filter((v) => typeof v === 'number'), k, '', { bins: 10 }));
   report.figures['over-runs'] = { runs: runs.length, figures: keys.length };
 }
 
