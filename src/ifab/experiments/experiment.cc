@@ -10,7 +10,6 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
-#include <mutex>
 
 #include "ifab/core/data_path.h"
 #include "ifab/core/error.h"

@@ -35,6 +35,12 @@ void ProgressLine::Restart() {
   start_ = std::chrono::steady_clock::now();
   fraction_ = -1.0;
   counting_ = false;
+  finished_ = 0;
+}
+
+int ProgressLine::FinishedOne() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return ++finished_;
 }
 
 std::string ProgressLine::Format(const std::string& phase, double fraction, double elapsed_s, std::size_t width) {

@@ -24,6 +24,8 @@ class ProgressLine {
   void Print(const std::string& line);
   /// Clear the live line (before the results table).
   void Finish();
+  /// Count one finished run (of --runs N) since Restart; returns the count.
+  int FinishedOne();
   /// Whether stderr is a terminal (live line) or not (log lines).
   bool terminal() const { return terminal_; }
 
@@ -40,7 +42,8 @@ class ProgressLine {
   std::string phase_, last_logged_;
   double fraction_{-1.0};
   std::chrono::steady_clock::time_point start_, last_draw_;
-  bool counting_{false};  // a fraction was given since Restart: time left counts from then
+  bool counting_{false};
+  int finished_{0};  // a fraction was given since Restart: time left counts from then
 };
 
 }  // namespace ifab::experiments

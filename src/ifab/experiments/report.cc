@@ -191,7 +191,7 @@ bool WriteReportAfterRun(const std::string& dir, bool print_path) {
     if (print_path) std::cout << fmt::format("report: {} ({:.1f} MB)\n", s.path, static_cast<double>(s.bytes) / 1e6);
     return true;
   } catch (const std::exception& e) {
-    std::cerr << "report.html not written: " << e.what() << "\n";
+    if (print_path) std::cerr << "report.html not written: " << e.what() << "\n";
     return false;
   }
 }

@@ -33,7 +33,8 @@ std::string DefaultReportBundle();
 ReportSummary WriteReport(const std::string& dir, const ReportOptions& options = {});
 
 /// WriteReport for the end of `ifab run`: the run's results are already written, so a page that
-/// cannot be drawn is reported on stderr (and returns false) instead of failing the run.
+/// cannot be drawn returns false (and says why on stderr when `print_path`) instead of failing
+/// the run. Prints the page's path and size when `print_path`.
 bool WriteReportAfterRun(const std::string& dir, bool print_path);
 
 }  // namespace ifab::experiments

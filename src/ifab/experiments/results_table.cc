@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <atomic>
 
 #include "ifab/experiments/progress.h"
 
@@ -93,8 +92,8 @@ std::string FormatResultsTable(const ResultsTable& table) {
 
 void ReportRunDone(const ExperimentInfo& info, std::size_t k, int runs, std::uint64_t seed,
                    const nlohmann::json& result, const std::string& error) {
-  static std::atomic<int> done{0};
-  const int n = ++done;
+  ProgressLine& line = ProgressLine::Global();
+  const int n = line.FinishedOne();
   std::string what;
   if (!error.empty()) {
     what = "failed: " + error;
@@ -104,7 +103,6 @@ void ReportRunDone(const ExperimentInfo& info, std::size_t k, int runs, std::uin
     const auto rows = OwnRows(info, result);
     for (std::size_t i = 0; i < rows.size() && i < 4; ++i) what += (i ? ", " : "") + rows[i][0] + " " + rows[i][1];
   }
-  ProgressLine& line = ProgressLine::Global();
   line.Print(fmt::format("run {:>3} (seed {}) {:>3}/{}: {}", k, seed, n, runs, what));
   line.Update(fmt::format("{} of {} runs done", n, runs), static_cast<double>(n) / runs);
 }
