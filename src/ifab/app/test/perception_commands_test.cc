@@ -1,15 +1,17 @@
-#include "ifab/perception/commands.h"
+#include "ifab/app/perception_commands.h"
 
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include "ifab/core/error.h"
 #include "ifab/core/random.h"
 #include "ifab/model/site.h"
 #include "ifab/perception/calibration.h"
 #include "ifab/perception/ply.h"
+#include "ifab/perception/registration.h"
 #include "ifab/perception/sweep_io.h"
 #include "ifab/perception/testing/synthetic.h"
 #include "ifab/sync/clock_sync.h"
@@ -92,6 +94,59 @@ TEST(RegisterCommand, LocalizesTheRobotFromAPlyCloudOfTheStack) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("--guess: expected 6 numbers, got 5"), std::string::npos) << e.what();
   }
+}
+
+// A partial --config changes only the keys it names: the shipped restarts: 2 stays.
+TEST(RegisterCommand, APartialConfigKeepsTheOtherDefaults) {
+  const fs::path dir = TempDir("register_partial");
+  Write(dir / "site.yaml", "boxes:\n  - {name: crate, size: [0.5, 0.4, 0.3], xyz: [1.5, 0.1, 0.0], rpy_deg: [0, 0, 25]}\n");
+  const Site site = LoadSite((dir / "site.yaml").string());
+  const Scene world(SensorFrameBodies(site));
+  testing::SyntheticLaser laser;
+  laser.noise.sigma_along = 0.005;
+  RandomStream rng(4);
+  auto at = [](double t) {
+    Pose3 T = Pose3::Identity();
+    T.translation() = Eigen::Vector3d(0.0, -0.4, 0.6);
+    T.linear() = RotationFromRpy(0.0, 0.15 + 0.35 * t, 0.3);
+    return T;
+  };
+  const std::vector<RayPoint> cloud = testing::SynthesizeCloud(world, at, 0.0, 1.0, laser, rng);
+  WritePly((dir / "cloud.ply").string(), ToPointCloud(cloud));
+  Write(dir / "partial.yaml", "registration: {max_iterations: 40}\n");
+  Write(dir / "guess.yaml", "boxes:\n  - {name: crate, size: [0.5, 0.4, 0.3], xyz: [1.52, 0.09, 0.01], rpy_deg: [1, 0, 27]}\n");
+  RegisterCommandOptions o;
+  o.cloud_path = (dir / "cloud.ply").string();
+  o.site_path = (dir / "guess.yaml").string();
+  o.frame = "sensor";
+  o.config_path = (dir / "partial.yaml").string();
+  o.out_dir = (dir / "out").string();
+  const nlohmann::json j = RegisterCommand(o);
+  EXPECT_NE(j["message"].get<std::string>().find("restarts"), std::string::npos) << j.dump(2);
+  EXPECT_TRUE(j["usable"].get<bool>()) << j.dump(2);
+  EXPECT_NE(j["fit"]["noise_model"].get<std::string>().find("estimated"), std::string::npos);
+  std::ostringstream out;
+  EXPECT_EQ(ReportRegistration(j, o.out_dir, out), 0);
+
+  // Stopped at max_iterations: not usable, exit code 1.
+  Write(dir / "one_step.yaml", "registration: {max_iterations: 1}\n");
+  o.config_path = (dir / "one_step.yaml").string();
+  const nlohmann::json k = RegisterCommand(o);
+  EXPECT_EQ(k["status"].get<std::string>(), "max_iterations");
+  EXPECT_FALSE(k["usable"].get<bool>());
+  EXPECT_EQ(ReportRegistration(k, o.out_dir, out), 1);
+
+  // A sensor profile is named in the output; --crop keeps what it says.
+  o.config_path.clear();
+  o.sensor = "sick_lms2xx";
+  o.crop = "radius 3";
+  const nlohmann::json p = RegisterCommand(o);
+  EXPECT_NE(p["fit"]["noise_model"].get<std::string>().find("SICK LMS-2xx"), std::string::npos) << p.dump(2);
+  o.crop = "sphere 3";
+  EXPECT_THROW(RegisterCommand(o), InputError);
+  o.crop.clear();
+  o.sensor = "no_such_laser";
+  EXPECT_THROW(RegisterCommand(o), InputError);
 }
 
 // Sweeps saved with raw device stamps and sync pulses: the loader syncs the clocks (TICSync
