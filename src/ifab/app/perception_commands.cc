@@ -33,7 +33,8 @@ struct PerceptionConfig {
   RegistrationOptions registration;
   CalibrationOptions calibration;
   ScanAssemblyOptions assembly;
-  bool user_sets_gate{false};  // the user's file names registration.gate_sigmas
+  bool user_sets_gate{false};         // the user's file names registration.gate_sigmas
+  bool user_sets_convergence{false};  // ... registration.convergence
 };
 
 PerceptionConfig ParsePerception(const ConfigNode& c) {
@@ -51,23 +52,31 @@ PerceptionConfig LoadPerceptionConfig(const std::string& path) {
   const std::string shipped = DataPath("perception/perception.yaml");
   ConfigNode c = ConfigNode::FromString("{}", "defaults");
   if (std::filesystem::exists(shipped)) c = ConfigNode::LoadFile(shipped);
-  bool gate = false;
+  bool gate = false, convergence = false;
   if (!path.empty()) {
     const ConfigNode user = ConfigNode::LoadFile(path);
     ParsePerception(user);  // errors name the user's file and line
-    if (auto r = user.Find("registration")) gate = r->Has("gate_sigmas");
+    auto names = [&](const ConfigNode& r) {
+      gate = gate || r.Has("gate_sigmas");
+      convergence = convergence || r.Has("convergence");
+    };
+    if (auto r = user.Find("registration")) names(*r);
     if (auto k = user.Find("calibration"))
-      if (auto r = k->Find("registration")) gate = gate || r->Has("gate_sigmas");
+      if (auto r = k->Find("registration")) names(*r);
     c = c.Overlay(user);
   }
   PerceptionConfig out = ParsePerception(c);
   out.user_sets_gate = gate;
+  out.user_sets_convergence = convergence;
   return out;
 }
 
 // --sensor: a profile's noise (data/sensors/NAME.yaml or a file), "config", or none: estimated.
-void ApplySensor(const std::string& sensor, bool user_sets_gate, RegistrationOptions& o) {
+void ApplySensor(const std::string& sensor, const PerceptionConfig& config, RegistrationOptions& o) {
+  // A user's cloud may hold a lone face: its in-plane motion must not keep the steps going.
+  if (!config.user_sets_convergence) o.convergence = Convergence::kResiduals;
   if (sensor == "config") return;
+  const bool user_sets_gate = config.user_sets_gate;
   if (!user_sets_gate) o.gate_sigmas = 3.0;  // a 3-sigma gate of whichever model is used
   if (sensor.empty()) {
     o.noise_source = NoiseSource::kEstimated;
@@ -141,7 +150,10 @@ Crop ParseCrop(const std::string& text) {
     if ((c.hi.array() <= c.lo.array()).any())
       ThrowInputError("--crop box: expected x0 y0 z0 x1 y1 z1 with x1 > x0, y1 > y0, z1 > z0, got '{}'", text);
   } else if (kind == "radius") {
-    const auto v = ParseNumbers(rest, "--crop radius", -1);
+    std::vector<double> v;
+    std::istringstream numbers(rest);
+    for (double x; numbers >> x;) v.push_back(x);
+    if (!numbers.eof()) ThrowInputError("--crop radius: expected R or R x y z (m), got '{}'", text);
     if (v.size() != 1 && v.size() != 4) ThrowInputError("--crop radius: expected R or R x y z (m), got '{}'", text);
     c.kind = Crop::Kind::kRadius;
     c.radius = v[0];
@@ -195,7 +207,7 @@ json RegisterCommand(const RegisterCommandOptions& o) {
                     o.frame);
   const bool sensor_frame = o.frame == "sensor";
   PerceptionConfig config = LoadPerceptionConfig(o.config_path);
-  ApplySensor(o.sensor, config.user_sets_gate, config.registration);
+  ApplySensor(o.sensor, config, config.registration);
   const Site site = LoadSite(o.site_path);
   if (!sensor_frame && o.guess.empty()) ThrowInputError("--guess: required with --frame site (the robot's pose in the site)");
   if (sensor_frame && !o.guess.empty())
@@ -302,7 +314,7 @@ json CalibrateCommand(const CalibrateCommandOptions& o) {
   const auto start = std::chrono::steady_clock::now();
   if (o.sweep_paths.empty()) ThrowInputError("calibrate: give at least one sweep file");
   PerceptionConfig config = LoadPerceptionConfig(o.config_path);
-  ApplySensor(o.sensor, config.user_sets_gate, config.calibration.registration);
+  ApplySensor(o.sensor, config, config.calibration.registration);
   const RobotModel robot = LoadRobotModel(o.robot_path.empty() ? DataPath("robots/insitu_fabricator.urdf") : o.robot_path);
   const std::string target_path = o.target_path.empty() ? DataPath("perception/cube_target.yaml") : o.target_path;
   const ConfigNode target = ConfigNode::LoadFile(target_path);

@@ -23,6 +23,9 @@ namespace {
 using Params = std::array<double, 6>;  // [t, w] about R0
 
 constexpr int kChunk = 256;  // points per Ceres residual block
+// The norm of 3 whitened components (kClosest) has median 1.538 (chi, 3 dof), 2.28 times that of
+// one |N(0, 1)|: divided by this, the robust spread and the gate read as for one component.
+constexpr double kChi3MedianRatio = 2.2806;
 
 Pose3 ApplyParams(const Params& x, const Eigen::Matrix3d& R0) {
   Pose3 T = Pose3::Identity();
@@ -192,6 +195,7 @@ class Engine {
     const std::size_t n = calibrating_ ? input.sweep->size() : input.cloud->size();
     matches_.resize(n);
     whitened_.assign(n, 0.0);
+    gate_out_.assign(n, 0);
     labels_.resize(n);
     flagged_.resize(n);
   }
@@ -241,6 +245,13 @@ class Engine {
         }
         continue;
       }
+      // The noise scale follows the fit down while it moves; once the steps are small it is held,
+      // so that the gate's points stop changing and the poses settle.
+      // (also after a third of the steps: a scale still drifting then is at the noise level)
+      if ((step.max_translation < 10.0 * options_.translation_tolerance &&
+           step.max_rotation < 10.0 * options_.rotation_tolerance) ||
+          3 * (it + 1) >= options_.max_iterations)
+        scale_frozen_ = gate_held_ = true;
       if (step.max_translation < options_.translation_tolerance && step.max_rotation < options_.rotation_tolerance) {
         s.status = RegistrationStatus::kConverged;
         s.message = fmt::format("converged in {} correspondence steps", it + 1);
@@ -261,7 +272,6 @@ class Engine {
       s.message = "no free body: poses held";
     }
     Match();  // labels and weights at the final poses
-    if (EstimateNoiseScale()) Match();
     Finish(out, start);
     return out;
   }
@@ -307,7 +317,7 @@ class Engine {
   // spread of the inliers' whitened errors. Early on that spread is the misalignment, so the gate
   // starts wide and shrinks as the fit settles. Returns true if the scale was updated.
   bool EstimateNoiseScale() {
-    if (options_.noise_source != NoiseSource::kEstimated) return false;
+    if (options_.noise_source != NoiseSource::kEstimated || scale_frozen_) return false;
     std::vector<double> a;
     for (std::size_t i = 0; i < labels_.size(); ++i)
       if (labels_[i] == PointLabel::kInlier) a.push_back(std::abs(whitened_[i]));
@@ -418,7 +428,7 @@ class Engine {
         chosen = closest_candidate();
       }
       if ((options_.max_distance > 0.0 && chosen.error > options_.max_distance) ||
-          (GateActive() && chosen.error > options_.gate_sigmas * chosen.sigma)) {
+          GateRejects(i, chosen.error / chosen.sigma)) {
         matches_[i] = m;
         return;
       }
@@ -455,13 +465,13 @@ class Engine {
       m.body = scene_.primitives()[static_cast<std::size_t>(near.primitive)].body;
       m.sqrt_information = noise_.SqrtInformation(u, range);
       whitened = (m.sqrt_information * (rp.p - near.point)).norm();
-      if (GateActive() && whitened > options_.gate_sigmas) {
+      if (GateRejects(i, whitened / kChi3MedianRatio)) {
         labels_[i] = PointLabel::kOutlier;
         matches_[i] = m;
         return;
       }
     }
-    whitened_[i] = whitened;
+    whitened_[i] = m.kind == PointMatch::Kind::kClosest ? whitened / kChi3MedianRatio : whitened;
     const double w = std::sqrt(RobustWeight(options_.loss, options_.loss_scale, whitened));
     m.sqrt_information *= w;
     m.inv_sigma *= w;
@@ -470,6 +480,15 @@ class Engine {
   }
 
   bool GateActive() const { return options_.gate_sigmas > 0.0 && scale_known_; }
+  // The gate's verdict on point i, `sigmas` off its face. Once the steps are small (the scale is
+  // held) the verdicts are held too: points at the gate would otherwise flip in and out, and the
+  // pose with them, by a fraction of its uncertainty, without end.
+  bool GateRejects(std::size_t i, double sigmas) {
+    if (!GateActive()) return false;
+    if (gate_held_) return gate_out_[i] != 0;
+    gate_out_[i] = sigmas > options_.gate_sigmas;
+    return gate_out_[i] != 0;
+  }
 
   int CountInliers() const {
     int n = 0;
@@ -606,12 +625,31 @@ class Engine {
     else
       relaxation_ = std::min(relaxation_ * 1.5, 1.0);
     previous_delta_ = delta;
+    std::vector<Pose3> moves;  // T_next * T_before^-1 per body
     for (std::size_t k = 0; k <= poses_.size(); ++k) {
       Pose3& pose = k == poses_.size() ? laser_ : poses_[k];
       const Pose3 next = Interpolate(pose, solved[k], relaxation_);
       r.max_translation = std::max(r.max_translation, (next.translation() - pose.translation()).norm());
       r.max_rotation = std::max(r.max_rotation, RotationAngle(next, pose));
+      moves.push_back(next * pose.inverse());
       pose = next;
+    }
+    if (options_.convergence == Convergence::kResiduals && !calibrating_) {
+      // How far the step moved the model under each inlier, along its normal: motion the data
+      // do not see (a plane sliding in itself, turning about its normal) does not count.
+      r.max_translation = r.max_rotation = 0.0;
+      for (std::size_t i = 0; i < matches_.size(); ++i) {
+        if (labels_[i] != PointLabel::kInlier) continue;
+        const PointMatch& m = matches_[i];
+        const Eigen::Vector3d& p = (*input_.cloud)[i].p;
+        const Pose3& T_move = moves[static_cast<std::size_t>(m.body)];
+        const Eigen::Vector3d d = T_move * p - p;
+        const double along = m.kind == PointMatch::Kind::kClosest
+                                 ? d.norm()
+                                 : std::abs((T_move.linear() * inverse_poses_[static_cast<std::size_t>(m.body)].linear().transpose() *
+                                             m.normal_body).dot(d));
+        r.max_translation = std::max(r.max_translation, along);
+      }
     }
     spdlog::debug("registration step: moved {:.3g} m, {:.3g} rad, relaxation {}", r.max_translation, r.max_rotation, relaxation_);
     return r;
@@ -755,6 +793,9 @@ class Engine {
   std::vector<double> whitened_;  // per point: its error over the noise model's sigma (before the loss)
   LaserNoiseModel noise_;         // options_.noise, or scaled to the residuals (kEstimated)
   bool scale_known_{true};
+  bool scale_frozen_{false};
+  bool gate_held_{false};
+  std::vector<char> gate_out_;  // per point: rejected by the gate (when gate_held_)
   double noise_scale_{1.0};
   int num_residuals_{0}, num_parameters_{0};
   std::vector<PointLabel> labels_;

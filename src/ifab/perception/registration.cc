@@ -21,7 +21,7 @@ Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
 }  // namespace
 
 RegistrationOptions RegistrationOptions::FromConfig(const ConfigNode& c, RegistrationOptions o) {
-  c.ExpectKeys({"noise", "noise_source", "gate_sigmas", "fit_tolerance", "residual", "max_iterations", "coarse_stride", "max_solver_iterations", "translation_tolerance",
+  c.ExpectKeys({"noise", "noise_source", "gate_sigmas", "fit_tolerance", "convergence", "residual", "max_iterations", "coarse_stride", "max_solver_iterations", "translation_tolerance",
                 "rotation_tolerance", "shadow_points", "shadow_edge_distance", "shadow_distance", "shadow_sigmas", "max_distance", "max_incidence_deg", "min_incidence_deg",
                 "loss", "loss_scale", "step_sigma_translation", "step_sigma_rotation", "restarts", "restart_distance", "prior_sigma_translation", "prior_sigma_rotation", "unconstrained_std",
                 "num_threads"});
@@ -36,6 +36,12 @@ RegistrationOptions RegistrationOptions::FromConfig(const ConfigNode& c, Registr
     else n->Fail("one of: model (the noise: section, a sensor profile), estimated (scaled to the residuals)");
   }
   c.ReadNonNegative("gate_sigmas", o.gate_sigmas);
+  if (auto v = c.Find("convergence")) {
+    const auto t = v->As<std::string>();
+    if (t == "pose") o.convergence = Convergence::kPose;
+    else if (t == "residuals") o.convergence = Convergence::kResiduals;
+    else v->Fail("one of: pose (the paper), residuals (the model under the inliers stops moving)");
+  }
   c.ReadNonNegative("fit_tolerance", o.fit_tolerance);
   if (o.fit_tolerance > 0.0 && o.fit_tolerance <= 1.0) c["fit_tolerance"].Fail("a factor above 1 (or 0: no test)");
   if (auto r = c.Find("residual")) {

@@ -46,6 +46,13 @@ enum class RegistrationResidual {
 /// Robust weighting of whitened residuals, re-weighted at every correspondence step.
 enum class RobustLoss { kNone, kHuber, kCauchy };
 
+/// What must stop moving for the correspondence steps to end.
+enum class Convergence {
+  kPose,       ///< every free body's pose (translation_tolerance, rotation_tolerance): the paper
+  kResiduals,  ///< the model under every inlier, along its normal (translation_tolerance): motion
+               ///< the data do not see (a lone board sliding in its plane) does not hold it up
+};
+
 /// Where the noise scale comes from.
 enum class NoiseSource {
   kModel,      ///< `noise` as given (a sensor profile, data/sensors/*.yaml)
@@ -70,6 +77,7 @@ struct RegistrationOptions {
                                        ///< step moves less than 10x the tolerances; then all
                                        ///< (speed-up for far guesses; 1 = off, the paper)
   int max_solver_iterations{25};       ///< Ceres iterations per step
+  Convergence convergence{Convergence::kPose};  ///< what the tolerances apply to
   double translation_tolerance{1e-5};  ///< [m] converged when no body moves more in a step
   double rotation_tolerance{5e-5};     ///< [rad] ... and none turns more
   bool shadow_points{true};            ///< apply the shadow-point rule (Sec. V-B)
