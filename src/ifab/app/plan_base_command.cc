@@ -59,6 +59,7 @@ void AddPlanBaseCommand(CLI::App& app, int& exit_code) {
     const Pose2 start = ParsePose(args->start, "--start", args->radians);
     const Pose2 goal = ParsePose(args->goal, "--goal", args->radians);
     const Site site = LoadSite(args->site);
+    site.RequireBoundary(args->site, "ifab plan-base");
     const base::BaseGeometry robot = base::BaseGeometry::Load(args->robot);
     const base::StompPlannerOptions options =
         base::StompPlannerOptions::FromConfig(ConfigNode::LoadFile(args->config)["base_planner"]);

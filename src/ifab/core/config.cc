@@ -27,6 +27,27 @@ ConfigNode ConfigNode::FromString(const std::string& text, const std::string& na
   return ConfigNode(root, std::make_shared<const std::string>(name), "", 1);
 }
 
+namespace {
+
+YAML::Node Merge(const YAML::Node& base, const YAML::Node& overlay) {
+  if (!base.IsMap() || !overlay.IsMap()) return YAML::Clone(overlay);
+  YAML::Node out = YAML::Clone(base);
+  for (const auto& kv : overlay) {
+    const std::string key = kv.first.as<std::string>();
+    out[key] = out[key].IsDefined() ? Merge(out[key], kv.second) : YAML::Clone(kv.second);
+  }
+  return out;
+}
+
+}  // namespace
+
+ConfigNode ConfigNode::Overlay(const ConfigNode& overlay) const {
+  if (overlay.IsNull()) return *this;
+  return ConfigNode(Merge(node_, overlay.node_),
+                    std::make_shared<const std::string>(fmt::format("{} (over {})", *overlay.file_, *file_)), path_,
+                    parent_line_);
+}
+
 int ConfigNode::Line() const {
   if (node_ && !node_.Mark().is_null()) return node_.Mark().line + 1;
   return parent_line_;

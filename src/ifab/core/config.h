@@ -25,6 +25,10 @@ class ConfigNode {
   static ConfigNode LoadFile(const std::string& path);
   /// Parse YAML text; `name` stands for the file in error messages.
   static ConfigNode FromString(const std::string& text, const std::string& name = "<string>");
+  /// This config with `overlay` on top: maps merge key by key (recursively), anything else in
+  /// the overlay replaces what is here. A partial user config thus changes only the keys it names
+  /// on top of the shipped defaults. Messages name the overlay's file.
+  ConfigNode Overlay(const ConfigNode& overlay) const;
 
   bool IsMap() const { return node_.IsMap(); }
   bool IsSequence() const { return node_.IsSequence(); }

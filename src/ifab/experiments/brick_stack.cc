@@ -108,6 +108,7 @@ Setup LoadSetup(const ConfigNode& c) {
   sequencer::MissionComponents& parts = s.parts;
   parts.robot = LoadRobotModel(s.sim_options.urdf);
   parts.site = LoadSite(s.sim_options.site);
+  parts.site.RequireBoundary(s.sim_options.site, "ifab run");
   parts.base_geometry = base::BaseGeometry::Load(Beside(c, "base"));
   parts.planner = base::StompPlannerOptions::FromConfig(ConfigNode::LoadFile(Beside(c, "planner"))["base_planner"]);
   parts.estimator = base::EstimatorOptions::FromConfig(ConfigNode::LoadFile(Beside(c, "estimator"))["estimator"]);

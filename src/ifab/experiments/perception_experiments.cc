@@ -21,7 +21,7 @@
 #include "ifab/core/random.h"
 #include "ifab/experiments/experiments.h"
 #include "ifab/perception/calibration.h"
-#include "ifab/perception/commands.h"
+#include "ifab/experiments/perception_json.h"
 #include "ifab/perception/ply.h"
 #include "ifab/perception/registration.h"
 #include "ifab/perception/scan_assembly.h"

@@ -3,6 +3,7 @@
 #include <Eigen/SVD>
 #include <fmt/format.h>
 
+#include <chrono>
 #include <cmath>
 
 #include "ifab/core/config.h"
@@ -10,10 +11,9 @@
 
 namespace ifab {
 
-CalibrationOptions CalibrationOptions::FromConfig(const ConfigNode& c) {
+CalibrationOptions CalibrationOptions::FromConfig(const ConfigNode& c, CalibrationOptions o) {
   c.ExpectKeys({"registration", "laser_extent", "autodiff"});
-  CalibrationOptions o;
-  if (auto r = c.Find("registration")) o.registration = RegistrationOptions::FromConfig(*r);
+  if (auto r = c.Find("registration")) o.registration = RegistrationOptions::FromConfig(*r, o.registration);
   c.ReadPositive("laser_extent", o.laser_extent);
   c.Read("autodiff", o.autodiff);
   return o;
@@ -24,12 +24,12 @@ std::string CalibrationSummary::BriefReport() const {
   std::string s = fmt::format(
       "calibration {} ({}): T_tool0_laser [{:.4f} {:.4f} {:.4f}] m [{:.3f} {:.3f} {:.3f}] deg, std [{:.2f} {:.2f} "
       "{:.2f}] mm [{:.3f} {:.3f} {:.3f}] deg; {} points, {} inliers, {} shadow removed, rms {:.2f} sigma, {} steps, "
-      "{:.2f} s",
+      "{:.2f} s; noise: {}; fit: {}",
       ToString(status), message, v[0], v[1], v[2], v[3] * 180 / M_PI, v[4] * 180 / M_PI, v[5] * 180 / M_PI,
       1e3 * std::sqrt(covariance(0, 0)), 1e3 * std::sqrt(covariance(1, 1)), 1e3 * std::sqrt(covariance(2, 2)),
       std::sqrt(covariance(3, 3)) * 180 / M_PI, std::sqrt(covariance(4, 4)) * 180 / M_PI,
       std::sqrt(covariance(5, 5)) * 180 / M_PI, num_points, num_inliers, num_shadow_removed, rms_whitened, iterations,
-      seconds);
+      seconds, fit.noise_source, fit.message);
   for (const auto& w : warnings) s += "\n  warning: " + w;
   return s;
 }
@@ -37,6 +37,7 @@ std::string CalibrationSummary::BriefReport() const {
 CalibrationSummary CalibrateLaserMount(const std::vector<CalibrationSweep>& sweeps,
                                        const std::vector<RegistrationBody>& bodies, const Pose3& T_tool0_laser_guess,
                                        const CalibrationOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
   std::vector<SweepPoint> all;
   std::vector<std::size_t> sweep_of;
   for (std::size_t k = 0; k < sweeps.size(); ++k) {
@@ -64,6 +65,7 @@ CalibrationSummary CalibrateLaserMount(const std::vector<CalibrationSweep>& swee
   s.num_inliers = r.summary.num_inliers;
   s.num_shadow_removed = r.summary.num_shadow_removed;
   s.rms_whitened = r.summary.rms_whitened;
+  s.fit = r.summary.fit;
   s.warnings = r.summary.warnings;
   s.sweep_inliers.assign(sweeps.size(), 0);
   for (std::size_t i = 0; i < r.summary.labels.size(); ++i)
@@ -71,6 +73,7 @@ CalibrationSummary CalibrateLaserMount(const std::vector<CalibrationSweep>& swee
   for (std::size_t k = 0; k < sweeps.size(); ++k)
     if (s.sweep_inliers[k] == 0)
       s.warnings.push_back(fmt::format("sweep '{}' has no point on the target", sweeps[k].name));
+  s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return s;
 }
 

@@ -29,8 +29,9 @@ struct CalibrationOptions {
                                      ///< way); false: the hand-derived ones (same values, checked in
                                      ///< the tests, about 5x faster)
 
-  /// Reads a `calibration:` section: {registration: {...}, laser_extent, autodiff}.
-  static CalibrationOptions FromConfig(const ConfigNode& config);
+  /// Reads a `calibration:` section over `base`: {registration: {...}, laser_extent, autodiff}.
+  static CalibrationOptions FromConfig(const ConfigNode& config, CalibrationOptions base);
+  static CalibrationOptions FromConfig(const ConfigNode& config) { return FromConfig(config, CalibrationOptions{}); }
 };
 
 struct CalibrationSummary {
@@ -50,10 +51,13 @@ struct CalibrationSummary {
   int num_inliers{0};
   int num_shadow_removed{0};
   double rms_whitened{0.0};
+  FitQuality fit;                          ///< noise model used, variance factor, fit test
   std::vector<std::string> warnings;
 
+  /// Converged, the residuals agree with the noise model, and the sweeps fix every direction of
+  /// the mount (a mount with a free direction is no calibration).
   bool IsUsable() const {
-    return status == RegistrationStatus::kConverged || status == RegistrationStatus::kMaxIterations;
+    return status == RegistrationStatus::kConverged && fit.consistent && unconstrained.empty();
   }
   std::string BriefReport() const;
 };

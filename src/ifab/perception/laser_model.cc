@@ -19,7 +19,7 @@ Eigen::Matrix3d LaserNoiseModel::SqrtInformation(const Eigen::Vector3d& ray, dou
   const Eigen::Vector3d v2 = ray.cross(v1);
   const double across = SigmaAcross(range);
   Eigen::Matrix3d s;
-  s.row(0) = ray.transpose() / sigma_along;
+  s.row(0) = ray.transpose() / SigmaAlong(range);
   s.row(1) = v1.transpose() / across;
   s.row(2) = v2.transpose() / across;
   return s;
@@ -29,13 +29,25 @@ double LaserNoiseModel::NormalVariance(const Eigen::Vector3d& ray, double range,
                                        const Eigen::Vector3d& n) const {
   const double c2 = std::min(1.0, std::pow(ray.dot(n), 2));
   const double across = SigmaAcross(range);
-  return sigma_along * sigma_along * c2 + across * across * (1.0 - c2);
+  const double along = SigmaAlong(range);
+  return along * along * c2 + across * across * (1.0 - c2);
 }
 
-LaserNoiseModel LaserNoiseModel::FromConfig(const ConfigNode& c) {
-  c.ExpectKeys({"sigma_along", "sigma_across_slope", "sigma_across_offset"});
-  LaserNoiseModel m;
+LaserNoiseModel LaserNoiseModel::Scaled(double k) const {
+  LaserNoiseModel m = *this;
+  m.sigma_along *= k;
+  m.sigma_along_slope *= k;
+  m.sigma_along_offset *= k;
+  m.sigma_across_slope *= k;
+  m.sigma_across_offset *= k;
+  return m;
+}
+
+LaserNoiseModel LaserNoiseModel::FromConfig(const ConfigNode& c, LaserNoiseModel m) {
+  c.ExpectKeys({"sigma_along", "sigma_along_slope", "sigma_along_offset", "sigma_across_slope", "sigma_across_offset"});
   c.ReadPositive("sigma_along", m.sigma_along);
+  c.ReadNonNegative("sigma_along_slope", m.sigma_along_slope);
+  c.Read("sigma_along_offset", m.sigma_along_offset);
   c.ReadNonNegative("sigma_across_slope", m.sigma_across_slope);
   c.ReadPositive("sigma_across_offset", m.sigma_across_offset);
   return m;

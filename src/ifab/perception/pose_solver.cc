@@ -23,6 +23,9 @@ namespace {
 using Params = std::array<double, 6>;  // [t, w] about R0
 
 constexpr int kChunk = 256;  // points per Ceres residual block
+// The norm of 3 whitened components (kClosest) has median 1.538 (chi, 3 dof), 2.28 times that of
+// one |N(0, 1)|: divided by this, the robust spread and the gate read as for one component.
+constexpr double kChi3MedianRatio = 2.2806;
 
 Pose3 ApplyParams(const Params& x, const Eigen::Matrix3d& R0) {
   Pose3 T = Pose3::Identity();
@@ -184,12 +187,15 @@ double RobustWeight(RobustLoss loss, double scale, double whitened) {
 class Engine {
  public:
   Engine(const PoseProblemInput& input, const std::vector<RegistrationBody>& bodies, const RegistrationOptions& options)
-      : input_(input), bodies_(bodies), options_(options), scene_(bodies) {
+      : input_(input), bodies_(bodies), options_(options), scene_(bodies), noise_(options.noise),
+        scale_known_(options.noise_source == NoiseSource::kModel) {
     for (const auto& b : bodies_) poses_.push_back(b.T_base_body);
     laser_ = input.T_tool0_laser;
     calibrating_ = input.sweep != nullptr;
     const std::size_t n = calibrating_ ? input.sweep->size() : input.cloud->size();
     matches_.resize(n);
+    whitened_.assign(n, 0.0);
+    gate_out_.assign(n, 0);
     labels_.resize(n);
     flagged_.resize(n);
   }
@@ -213,6 +219,7 @@ class Engine {
     stride_ = std::max(1, options_.coarse_stride);
     for (int it = 0; it < options_.max_iterations && any_free; ++it) {
       Match();
+      if (EstimateNoiseScale()) Match();
       if (CountInliers() == 0) {
         s.status = RegistrationStatus::kNoPoints;
         s.message = "no point lies near the model under the initial guess";
@@ -238,6 +245,13 @@ class Engine {
         }
         continue;
       }
+      // The noise scale follows the fit down while it moves; once the steps are small it is held,
+      // so that the gate's points stop changing and the poses settle.
+      // (also after a third of the steps: a scale still drifting then is at the noise level)
+      if ((step.max_translation < 10.0 * options_.translation_tolerance &&
+           step.max_rotation < 10.0 * options_.rotation_tolerance) ||
+          3 * (it + 1) >= options_.max_iterations)
+        scale_frozen_ = gate_held_ = true;
       if (step.max_translation < options_.translation_tolerance && step.max_rotation < options_.rotation_tolerance) {
         s.status = RegistrationStatus::kConverged;
         s.message = fmt::format("converged in {} correspondence steps", it + 1);
@@ -297,6 +311,23 @@ class Engine {
       return static_cast<int>(period);
     }
     return 0;
+  }
+
+  // Noise scale from the residuals (NoiseSource::kEstimated): the model's shape times the robust
+  // spread of the inliers' whitened errors. Early on that spread is the misalignment, so the gate
+  // starts wide and shrinks as the fit settles. Returns true if the scale was updated.
+  bool EstimateNoiseScale() {
+    if (options_.noise_source != NoiseSource::kEstimated || scale_frozen_) return false;
+    std::vector<double> a;
+    for (std::size_t i = 0; i < labels_.size(); ++i)
+      if (labels_[i] == PointLabel::kInlier) a.push_back(std::abs(whitened_[i]));
+    if (a.size() < 10) return false;
+    const double k = RobustScale(std::move(a), scale_known_ ? options_.gate_sigmas : 0.0);
+    if (!(k > 0.0) || !std::isfinite(k)) return false;
+    noise_scale_ *= k;
+    noise_ = options_.noise.Scaled(noise_scale_);
+    scale_known_ = true;
+    return true;
   }
 
   bool Informs(int body) const { return calibrating_ || bodies_[static_cast<std::size_t>(body)].free; }
@@ -365,7 +396,7 @@ class Engine {
                                                                         : Eigen::Vector3d((rp.p - near.point) / near.distance);
         k.signed_distance = k.n.dot(rp.p - k.x);
         k.error = std::abs(k.signed_distance);
-        k.sigma = std::sqrt(options_.noise.NormalVariance(u, range, k.n));
+        k.sigma = std::sqrt(noise_.NormalVariance(u, range, k.n));
         return k;
       };
       const double reach = options_.max_distance > 0.0 ? options_.max_distance : 1.0;
@@ -381,7 +412,7 @@ class Engine {
         // slipped past it is metres long but only millimetres off the face's plane).
         const double c = std::max(std::abs(chosen.n.dot(u)), 1e-3);
         chosen.error = std::abs(chosen.signed_distance) / c;
-        chosen.sigma = std::sqrt(options_.noise.NormalVariance(u, range, chosen.n)) / c;
+        chosen.sigma = std::sqrt(noise_.NormalVariance(u, range, chosen.n)) / c;
         const bool off = chosen.error > options_.shadow_distance && chosen.error > options_.shadow_sigmas * chosen.sigma;
         if (flagged_[i] && off) {
           const Candidate other = closest_candidate();
@@ -396,7 +427,8 @@ class Engine {
       } else {
         chosen = closest_candidate();
       }
-      if (options_.max_distance > 0.0 && chosen.error > options_.max_distance) {
+      if ((options_.max_distance > 0.0 && chosen.error > options_.max_distance) ||
+          GateRejects(i, chosen.error / chosen.sigma)) {
         matches_[i] = m;
         return;
       }
@@ -412,7 +444,7 @@ class Engine {
       m.primitive = chosen.primitive;
       m.normal_body = T_body_base.linear() * chosen.n;
       m.offset_body = m.normal_body.dot(T_body_base * chosen.x);
-      const double normal_sigma = std::sqrt(options_.noise.NormalVariance(u, range, chosen.n));
+      const double normal_sigma = std::sqrt(noise_.NormalVariance(u, range, chosen.n));
       if (chosen.range) {
         m.kind = PointMatch::Kind::kRange;
         m.inv_sigma = c / normal_sigma;
@@ -431,14 +463,31 @@ class Engine {
       m.kind = PointMatch::Kind::kClosest;
       m.primitive = near.primitive;
       m.body = scene_.primitives()[static_cast<std::size_t>(near.primitive)].body;
-      m.sqrt_information = options_.noise.SqrtInformation(u, range);
+      m.sqrt_information = noise_.SqrtInformation(u, range);
       whitened = (m.sqrt_information * (rp.p - near.point)).norm();
+      if (GateRejects(i, whitened / kChi3MedianRatio)) {
+        labels_[i] = PointLabel::kOutlier;
+        matches_[i] = m;
+        return;
+      }
     }
+    whitened_[i] = m.kind == PointMatch::Kind::kClosest ? whitened / kChi3MedianRatio : whitened;
     const double w = std::sqrt(RobustWeight(options_.loss, options_.loss_scale, whitened));
     m.sqrt_information *= w;
     m.inv_sigma *= w;
     labels_[i] = Informs(m.body) ? PointLabel::kInlier : PointLabel::kFixed;
     matches_[i] = m;
+  }
+
+  bool GateActive() const { return options_.gate_sigmas > 0.0 && scale_known_; }
+  // The gate's verdict on point i, `sigmas` off its face. Once the steps are small (the scale is
+  // held) the verdicts are held too: points at the gate would otherwise flip in and out, and the
+  // pose with them, by a fraction of its uncertainty, without end.
+  bool GateRejects(std::size_t i, double sigmas) {
+    if (!GateActive()) return false;
+    if (gate_held_) return gate_out_[i] != 0;
+    gate_out_[i] = sigmas > options_.gate_sigmas;
+    return gate_out_[i] != 0;
   }
 
   int CountInliers() const {
@@ -508,6 +557,13 @@ class Engine {
     }
     auto add_block = [&](double* block, int body) {
       if (!b.problem->HasParameterBlock(block)) b.problem->AddParameterBlock(block, 6);
+      if (body >= 0 && with_priors) {  // (the information is wanted over all 6 components)
+        std::vector<int> held;
+        for (int c = 0; c < 6; ++c)
+          if (bodies_[static_cast<std::size_t>(body)].fixed[static_cast<std::size_t>(c)]) held.push_back(c);
+        if (held.size() == 6) b.problem->SetParameterBlockConstant(block);
+        else if (!held.empty()) b.problem->SetManifold(block, new ceres::SubsetManifold(6, held));
+      }
       b.free_blocks.push_back(block);
       b.block_body.push_back(body);
       if (with_priors) {
@@ -569,12 +625,31 @@ class Engine {
     else
       relaxation_ = std::min(relaxation_ * 1.5, 1.0);
     previous_delta_ = delta;
+    std::vector<Pose3> moves;  // T_next * T_before^-1 per body
     for (std::size_t k = 0; k <= poses_.size(); ++k) {
       Pose3& pose = k == poses_.size() ? laser_ : poses_[k];
       const Pose3 next = Interpolate(pose, solved[k], relaxation_);
       r.max_translation = std::max(r.max_translation, (next.translation() - pose.translation()).norm());
       r.max_rotation = std::max(r.max_rotation, RotationAngle(next, pose));
+      moves.push_back(next * pose.inverse());
       pose = next;
+    }
+    if (options_.convergence == Convergence::kResiduals && !calibrating_) {
+      // How far the step moved the model under each inlier, along its normal: motion the data
+      // do not see (a plane sliding in itself, turning about its normal) does not count.
+      r.max_translation = r.max_rotation = 0.0;
+      for (std::size_t i = 0; i < matches_.size(); ++i) {
+        if (labels_[i] != PointLabel::kInlier) continue;
+        const PointMatch& m = matches_[i];
+        const Eigen::Vector3d& p = (*input_.cloud)[i].p;
+        const Pose3& T_move = moves[static_cast<std::size_t>(m.body)];
+        const Eigen::Vector3d d = T_move * p - p;
+        const double along = m.kind == PointMatch::Kind::kClosest
+                                 ? d.norm()
+                                 : std::abs((T_move.linear() * inverse_poses_[static_cast<std::size_t>(m.body)].linear().transpose() *
+                                             m.normal_body).dot(d));
+        r.max_translation = std::max(r.max_translation, along);
+      }
     }
     spdlog::debug("registration step: moved {:.3g} m, {:.3g} rad, relaxation {}", r.max_translation, r.max_rotation, relaxation_);
     return r;
@@ -597,12 +672,26 @@ class Engine {
       RegisteredBody rb;
       rb.name = bodies_[k].name;
       rb.free = bodies_[k].free;
+      static const char* kNames[6] = {"x", "y", "z", "rx", "ry", "rz"};
+      for (int c = 0; c < 6; ++c)
+        if (bodies_[k].fixed[static_cast<std::size_t>(c)]) rb.fixed.push_back(kNames[c]);
       rb.T_base_body = poses_[k];
       for (std::size_t i = 0; i < matches_.size(); ++i)
         rb.inliers += labels_[i] == PointLabel::kInlier && matches_[i].body == static_cast<int>(k);
       s.bodies.push_back(rb);
     }
     if (s.num_inliers > 0) Information(out);
+    std::vector<double> inlier_whitened;
+    for (std::size_t i = 0; i < matches_.size(); ++i)
+      if (labels_[i] == PointLabel::kInlier) inlier_whitened.push_back(whitened_[i]);
+    s.fit = AssessFit(inlier_whitened, s.cost, num_residuals_, num_parameters_, options_.fit_tolerance,
+                      options_.noise_source == NoiseSource::kEstimated, options_.gate_sigmas);
+    s.fit.noise = noise_;
+    s.fit.noise_scale = noise_scale_;
+    s.fit.noise_source = options_.noise_source == NoiseSource::kEstimated
+                             ? fmt::format("estimated from the residuals (shape of {}, scaled {:.3f}x)", options_.noise_name,
+                                           noise_scale_)
+                             : options_.noise_name;
     for (const auto& rb : s.bodies)
       if (!rb.unconstrained.empty())
         s.warnings.push_back(fmt::format("body '{}' is not constrained by the scan in {} direction(s): {}", rb.name,
@@ -631,6 +720,16 @@ class Engine {
     s.rms_whitened = b.num_residuals > 0 ? std::sqrt(2.0 * cost / b.num_residuals) : 0.0;
     if (b.free_blocks.empty()) return;
     const int n = static_cast<int>(b.free_blocks.size()) * 6;
+    // Held components are no parameters; the rest are scaled to the residuals' actual spread (the
+    // a-posteriori variance factor), so error bars widen when the noise model is too optimistic.
+    std::vector<char> held(static_cast<std::size_t>(n), 0);
+    for (std::size_t k = 0; k < b.free_blocks.size(); ++k)
+      for (int c = 0; c < 6; ++c)
+        held[k * 6 + static_cast<std::size_t>(c)] =
+            b.block_body[k] >= 0 && bodies_[static_cast<std::size_t>(b.block_body[k])].fixed[static_cast<std::size_t>(c)];
+    num_residuals_ = b.num_residuals;
+    num_parameters_ = n - static_cast<int>(std::count(held.begin(), held.end(), 1));
+    const double s0_squared = b.num_residuals > num_parameters_ ? 2.0 * cost / (b.num_residuals - num_parameters_) : 1.0;
     Eigen::MatrixXd H = Eigen::MatrixXd::Zero(n, n);
     for (int row = 0; row < crs.num_rows; ++row) {
       for (int a = crs.rows[static_cast<std::size_t>(row)]; a < crs.rows[static_cast<std::size_t>(row) + 1]; ++a) {
@@ -642,10 +741,12 @@ class Engine {
         }
       }
     }
+    if (s0_squared > 0.0) H /= s0_squared;
     Eigen::VectorXd prior(n);
     for (int k = 0; k < n; ++k) {
       const double sigma = (k % 6) < 3 ? options_.prior_sigma_translation : options_.prior_sigma_rotation;
       prior[k] = 1.0 / (sigma * sigma);
+      if (held[static_cast<std::size_t>(k)]) H(k, k) += 1e12;  // known exactly
     }
     const Eigen::MatrixXd H_reg = H + Eigen::MatrixXd(prior.asDiagonal());
     const Eigen::MatrixXd covariance = H_reg.ldlt().solve(Eigen::MatrixXd::Identity(n, n));
@@ -668,7 +769,9 @@ class Engine {
       const int body = b.block_body[k];
       const double extent = body < 0 ? input_.laser_extent : scene_.Extent(body);
       const auto free_dirs = UnconstrainedDirections(marginal, extent, options_.unconstrained_std);
-      const Matrix6d cov = covariance.block(o, o, 6, 6);
+      Matrix6d cov = covariance.block(o, o, 6, 6);
+      for (int c = 0; c < 6; ++c)
+        if (held[static_cast<std::size_t>(o + c)]) cov.row(c).setZero(), cov.col(c).setZero();
       if (body < 0) {
         out.laser_covariance = cov;
         out.laser_unconstrained = free_dirs;
@@ -687,6 +790,14 @@ class Engine {
   Pose3 laser_{Pose3::Identity()};
   bool calibrating_{false};
   std::vector<PointMatch> matches_;
+  std::vector<double> whitened_;  // per point: its error over the noise model's sigma (before the loss)
+  LaserNoiseModel noise_;         // options_.noise, or scaled to the residuals (kEstimated)
+  bool scale_known_{true};
+  bool scale_frozen_{false};
+  bool gate_held_{false};
+  std::vector<char> gate_out_;  // per point: rejected by the gate (when gate_held_)
+  double noise_scale_{1.0};
+  int num_residuals_{0}, num_parameters_{0};
   std::vector<PointLabel> labels_;
   std::vector<char> flagged_;
 };

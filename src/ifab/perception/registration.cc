@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <fmt/format.h>
 
+#include <chrono>
 #include <cmath>
 
 #include "ifab/core/config.h"
@@ -19,13 +20,30 @@ Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
 
 }  // namespace
 
-RegistrationOptions RegistrationOptions::FromConfig(const ConfigNode& c) {
-  c.ExpectKeys({"noise", "residual", "max_iterations", "coarse_stride", "max_solver_iterations", "translation_tolerance",
+RegistrationOptions RegistrationOptions::FromConfig(const ConfigNode& c, RegistrationOptions o) {
+  c.ExpectKeys({"noise", "noise_source", "gate_sigmas", "fit_tolerance", "convergence", "residual", "max_iterations", "coarse_stride", "max_solver_iterations", "translation_tolerance",
                 "rotation_tolerance", "shadow_points", "shadow_edge_distance", "shadow_distance", "shadow_sigmas", "max_distance", "max_incidence_deg", "min_incidence_deg",
                 "loss", "loss_scale", "step_sigma_translation", "step_sigma_rotation", "restarts", "restart_distance", "prior_sigma_translation", "prior_sigma_rotation", "unconstrained_std",
                 "num_threads"});
-  RegistrationOptions o;
-  if (auto n = c.Find("noise")) o.noise = LaserNoiseModel::FromConfig(*n);
+  if (auto n = c.Find("noise")) {
+    o.noise = LaserNoiseModel::FromConfig(*n, o.noise);
+    o.noise_name = "noise: of " + c.file();
+  }
+  if (auto n = c.Find("noise_source")) {
+    const auto v = n->As<std::string>();
+    if (v == "model") o.noise_source = NoiseSource::kModel;
+    else if (v == "estimated") o.noise_source = NoiseSource::kEstimated;
+    else n->Fail("one of: model (the noise: section, a sensor profile), estimated (scaled to the residuals)");
+  }
+  c.ReadNonNegative("gate_sigmas", o.gate_sigmas);
+  if (auto v = c.Find("convergence")) {
+    const auto t = v->As<std::string>();
+    if (t == "pose") o.convergence = Convergence::kPose;
+    else if (t == "residuals") o.convergence = Convergence::kResiduals;
+    else v->Fail("one of: pose (the paper), residuals (the model under the inliers stops moving)");
+  }
+  c.ReadNonNegative("fit_tolerance", o.fit_tolerance);
+  if (o.fit_tolerance > 0.0 && o.fit_tolerance <= 1.0) c["fit_tolerance"].Fail("a factor above 1 (or 0: no test)");
   if (auto r = c.Find("residual")) {
     const auto v = r->As<std::string>();
     if (v == "closest") o.residual = RegistrationResidual::kClosest;
@@ -43,12 +61,12 @@ RegistrationOptions RegistrationOptions::FromConfig(const ConfigNode& c) {
   c.ReadNonNegative("shadow_sigmas", o.shadow_sigmas);
   c.ReadNonNegative("max_distance", o.max_distance);
   if (c.Has("max_incidence_deg")) {
-    double deg = 90.0;
+    double deg = o.max_incidence * 180.0 / M_PI;
     c.ReadInRange("max_incidence_deg", deg, 0.0, 90.0);
     o.max_incidence = deg * M_PI / 180.0;
   }
   if (c.Has("min_incidence_deg")) {
-    double deg = 0.0;
+    double deg = o.min_incidence * 180.0 / M_PI;
     c.ReadInRange("min_incidence_deg", deg, 0.0, 90.0);
     o.min_incidence = deg * M_PI / 180.0;
   }
@@ -90,9 +108,10 @@ const RegisteredBody* RegistrationSummary::Find(const std::string& name) const {
 
 std::string RegistrationSummary::BriefReport() const {
   std::string s = fmt::format("registration {} ({}): {} points, {} inliers, {} shadow points removed ({} flagged), "
-                              "{} outliers, {} grazing, rms {:.2f} sigma, {} steps, {:.3f} s",
+                              "{} outliers, {} grazing, rms {:.2f} sigma, {} steps, {:.3f} s; noise: {}; fit: {}",
                               ToString(status), message, num_points, num_inliers, num_shadow_removed,
-                              num_shadow_flagged, num_outliers, num_grazing, rms_whitened, iterations, seconds);
+                              num_shadow_flagged, num_outliers, num_grazing, rms_whitened, iterations, seconds,
+                              fit.noise_source, fit.message);
   for (const auto& b : bodies) {
     const auto v = XyzRpyFromPose(b.T_base_body);
     s += fmt::format("\n  {} {}: [{:.4f} {:.4f} {:.4f}] m, [{:.3f} {:.3f} {:.3f}] deg, {} inliers, std "
@@ -108,6 +127,7 @@ std::string RegistrationSummary::BriefReport() const {
 
 RegistrationSummary Register(const std::vector<RayPoint>& cloud, const std::vector<RegistrationBody>& bodies,
                              const RegistrationOptions& options) {
+  const auto t_start = std::chrono::steady_clock::now();
   internal::PoseProblemInput input;
   input.cloud = &cloud;
   RegistrationSummary best = internal::SolvePoseProblem(input, bodies, options).summary;
@@ -139,7 +159,10 @@ RegistrationSummary Register(const std::vector<RayPoint>& cloud, const std::vect
         v.head<3>() = current.bodies[b].T_base_body.linear().col(axis);
         directions.push_back(v);
       }
-      for (const auto& v : directions) {
+      for (auto v : directions) {
+        for (int c = 0; c < 6; ++c)  // held components stay at the guess
+          if (bodies[b].fixed[static_cast<std::size_t>(c)]) v[c] = 0.0;
+        if (!(v.norm() > 1e-9)) continue;
         for (double sign : {-1.0, 1.0}) {
           std::vector<RegistrationBody> start = bodies;
           for (std::size_t j = 0; j < bodies.size(); ++j) start[j].T_base_body = current.bodies[j].T_base_body;
@@ -159,6 +182,7 @@ RegistrationSummary Register(const std::vector<RayPoint>& cloud, const std::vect
     if (!improved) break;
   }
   if (restarts > 0) best.message += fmt::format(" (best of {} restarts)", restarts + 1);
+  best.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   return best;
 }
 
@@ -168,12 +192,60 @@ std::vector<RegistrationBody> SiteBodies(const Site& site, const Pose3& T_site_b
   std::vector<RegistrationBody> bodies;
   RegistrationBody rest{"site", T_base_site, {}, true};
   for (auto& o : objects) {
-    const bool is_ground = o.name == "ground";
+    const bool is_ground = site.has_ground && o.name == "ground";
     if (is_ground && separate_ground) bodies.push_back({"ground", T_base_site, {o}, true});
     else rest.parts.push_back(o);
   }
-  bodies.push_back(std::move(rest));
+  if (!rest.parts.empty()) bodies.push_back(std::move(rest));
   return bodies;
+}
+
+std::vector<RegistrationBody> SensorFrameBodies(const Site& site) {
+  std::vector<RegistrationBody> bodies;
+  for (const SiteObject& o : site.Bodies()) bodies.push_back({o.name, o.T_site_object, o.parts, true});
+  return bodies;
+}
+
+std::vector<RegisteredPlane> RegisteredPlanes(const RegistrationSummary& summary,
+                                              const std::vector<RegistrationBody>& bodies, double max_std) {
+  std::vector<RegisteredPlane> out;
+  for (std::size_t k = 0; k < bodies.size() && k < summary.bodies.size(); ++k) {
+    const RegisteredBody& rb = summary.bodies[k];
+    const Pose3& T = rb.T_base_body;
+    for (const auto& part : bodies[k].parts) {
+      for (const auto& g : part.primitives) {
+        Eigen::Vector3d n_part;
+        double d_part = 0.0;
+        if (const auto* plane = std::get_if<Plane>(&g)) n_part = plane->normal, d_part = plane->offset;
+        else if (const auto* poly = std::get_if<ConvexPolygon>(&g)) n_part = poly->normal(), d_part = poly->offset();
+        else continue;
+        RegisteredPlane p;
+        p.body = rb.name;
+        const Pose3 T_base_part = T * part.T_site_object;
+        p.normal = T_base_part.linear() * n_part;
+        p.offset = p.normal.dot(T_base_part * (d_part * n_part));
+        // First-order propagation of the pose covariance (perturbation [dt, w] about the body
+        // origin t): d offset = n . dt + (n x t) . w, and the normal tilts by w across n.
+        const Eigen::Vector3d t = T.translation();
+        const Eigen::Vector3d e1 = AnyPerpendicular(p.normal), e2 = p.normal.cross(e1);
+        Eigen::Matrix<double, 3, 6> J = Eigen::Matrix<double, 3, 6>::Zero();
+        J.block<1, 3>(0, 0) = p.normal.transpose();
+        J.block<1, 3>(0, 3) = p.normal.cross(t).transpose();
+        J.block<1, 3>(1, 3) = e1.transpose();
+        J.block<1, 3>(2, 3) = e2.transpose();
+        const Eigen::Matrix3d C = J * rb.covariance * J.transpose();
+        p.offset_std = std::sqrt(std::max(0.0, C(0, 0)));
+        p.tilt_std = std::sqrt(std::max({0.0, C(1, 1), C(2, 2)}));
+        // The tilt is judged at the body's extent, as UnconstrainedDirections does.
+        double extent = 0.0;
+        if (auto box = Bounds(g, Pose3::Identity())) extent = 0.5 * (box->hi - box->lo).norm();
+        p.constrained = rb.free && p.offset_std < max_std && (extent > 0.0 ? p.tilt_std * extent : p.tilt_std) < max_std;
+        if (!rb.free) p.constrained = true;
+        out.push_back(p);
+      }
+    }
+  }
+  return out;
 }
 
 SiteLocalization LocalizeInSite(const std::vector<RayPoint>& cloud, const Site& site, const Pose3& T_site_base_guess,
@@ -181,8 +253,13 @@ SiteLocalization LocalizeInSite(const std::vector<RayPoint>& cloud, const Site& 
   SiteLocalization out;
   out.registration = Register(cloud, SiteBodies(site, T_site_base_guess, separate_ground), options);
   const RegisteredBody* body = out.registration.Find("site");
+  if (!body) {  // the site has no object but the ground: nothing to locate the robot by
+    out.unconstrained = {"the site has no object besides the ground"};
+    return out;
+  }
   out.T_site_base = body->T_base_body.inverse();
   out.covariance = InverseCovariance(body->T_base_body, body->covariance);
+  out.unconstrained = body->unconstrained;
   return out;
 }
 

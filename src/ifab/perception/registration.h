@@ -27,6 +27,7 @@
 #include "ifab/core/se3.h"
 #include "ifab/model/site.h"
 #include "ifab/perception/cloud.h"
+#include "ifab/perception/fit_quality.h"
 #include "ifab/perception/laser_model.h"
 #include "ifab/perception/scene.h"
 
@@ -45,14 +46,38 @@ enum class RegistrationResidual {
 /// Robust weighting of whitened residuals, re-weighted at every correspondence step.
 enum class RobustLoss { kNone, kHuber, kCauchy };
 
+/// What must stop moving for the correspondence steps to end.
+enum class Convergence {
+  kPose,       ///< every free body's pose (translation_tolerance, rotation_tolerance): the paper
+  kResiduals,  ///< the model under every inlier, along its normal (translation_tolerance): motion
+               ///< the data do not see (a lone board sliding in its plane) does not hold it up
+};
+
+/// Where the noise scale comes from.
+enum class NoiseSource {
+  kModel,      ///< `noise` as given (a sensor profile, data/sensors/*.yaml)
+  kEstimated,  ///< `noise`'s shape scaled to the residuals' robust spread (MAD), re-estimated at
+               ///< every correspondence step (so the gate shrinks as the fit settles, as KISS-ICP's
+               ///< adaptive threshold does)
+};
+
 struct RegistrationOptions {
   LaserNoiseModel noise;                                       ///< point covariance (Sec. V-B)
+  NoiseSource noise_source{NoiseSource::kModel};               ///< the scale of `noise`: given or estimated
+  std::string noise_name{"utm30lx (built-in default)"};        ///< where `noise` came from (for the output)
+  double gate_sigmas{0.0};             ///< points whose range error exceeds this many sigmas of the
+                                       ///< noise model get zero error (0 = off; max_distance caps it)
+  double fit_tolerance{2.0};           ///< usable only if the inliers' robust spread (1.4826 median
+                                       ///< |whitened error|) is within this factor of the noise
+                                       ///< model's (gate and loss are in sigmas: they mean nothing
+                                       ///< if sigma is off by more); 0 = no test
   RegistrationResidual residual{RegistrationResidual::kRay};  ///< error per point (kClosest: the paper)
   int max_iterations{30};              ///< correspondence steps (match, then solve)
   int coarse_stride{1};                ///< the first steps use every n-th matched point, until a
                                        ///< step moves less than 10x the tolerances; then all
                                        ///< (speed-up for far guesses; 1 = off, the paper)
   int max_solver_iterations{25};       ///< Ceres iterations per step
+  Convergence convergence{Convergence::kPose};  ///< what the tolerances apply to
   double translation_tolerance{1e-5};  ///< [m] converged when no body moves more in a step
   double rotation_tolerance{5e-5};     ///< [rad] ... and none turns more
   bool shadow_points{true};            ///< apply the shadow-point rule (Sec. V-B)
@@ -89,8 +114,9 @@ struct RegistrationOptions {
                                        ///< extent) exceeds this is reported unconstrained
   int num_threads{1};                  ///< Ceres threads
 
-  /// Reads a `registration:` section; every key optional, unknown keys rejected.
-  static RegistrationOptions FromConfig(const ConfigNode& config);
+  /// Reads a `registration:` section over `base`; every key optional, unknown keys rejected.
+  static RegistrationOptions FromConfig(const ConfigNode& config, RegistrationOptions base);
+  static RegistrationOptions FromConfig(const ConfigNode& config) { return FromConfig(config, RegistrationOptions{}); }
 };
 
 /// Per-point outcome, for inspection (e.g. colouring a PLY as in the paper's Fig. 4).
@@ -115,6 +141,9 @@ struct RegisteredBody {
   Matrix6d covariance{Matrix6d::Zero()};
   int inliers{0};                          ///< points contributing an error to this body
   std::vector<std::string> unconstrained;  ///< e.g. "translation along x", "rotation about z"
+  std::vector<std::string> fixed;          ///< components held at the guess (RegistrationBody::fixed)
+  /// Every direction of the pose is fixed by the data (or held): the pose may be used.
+  bool Constrained() const { return unconstrained.empty(); }
 };
 
 struct RegistrationSummary {
@@ -131,18 +160,20 @@ struct RegistrationSummary {
   int num_outliers{0};
   int num_grazing{0};         ///< kRay: rays too oblique to their face
   double rms_whitened{0.0};   ///< sqrt(sum r^2 / #residuals): about 1 if the noise model fits
+  FitQuality fit;             ///< noise model used, variance factor, test of the fit (fit_quality.h)
   std::vector<PointLabel> labels;  ///< per input point
   std::vector<int> point_body;     ///< per input point: body matched (-1: none)
   std::vector<std::string> warnings;
 
-  bool IsUsable() const {
-    return status == RegistrationStatus::kConverged || status == RegistrationStatus::kMaxIterations;
-  }
+  /// Converged, and the residuals agree with the noise model. A body's pose is usable only if it
+  /// is also Constrained() (a single face leaves its in-plane directions free).
+  bool IsUsable() const { return status == RegistrationStatus::kConverged && fit.consistent; }
   const RegisteredBody* Find(const std::string& name) const;
   std::string BriefReport() const;
 };
 
-/// Register a cloud (base frame) to the bodies, starting from their T_base_body.
+/// Register a cloud (base frame) to the bodies, starting from their T_base_body. `seconds` counts
+/// every solve (restarts included).
 RegistrationSummary Register(const std::vector<RayPoint>& cloud, const std::vector<RegistrationBody>& bodies,
                              const RegistrationOptions& options = {});
 
@@ -151,13 +182,30 @@ RegistrationSummary Register(const std::vector<RayPoint>& cloud, const std::vect
 /// and "site" (everything else, rigid, its pose T_base_site).
 std::vector<RegistrationBody> SiteBodies(const Site& site, const Pose3& T_site_base_guess,
                                          bool separate_ground = true);
+/// The site's objects as separate bodies in the cloud's own frame (`ifab register --frame
+/// sensor`): the site YAML gives each object's pose guess in that frame; each is solved apart.
+std::vector<RegistrationBody> SensorFrameBodies(const Site& site);
+
+/// A plane of a registered body in the cloud's frame, n . p = offset, with its uncertainty.
+struct RegisteredPlane {
+  std::string body;
+  Eigen::Vector3d normal{Eigen::Vector3d::UnitZ()};
+  double offset{0.0};       ///< [m]
+  double offset_std{0.0};   ///< [m]
+  double tilt_std{0.0};     ///< [rad] of the normal (larger of the two axes across it)
+  bool constrained{false};  ///< offset and tilt fixed by the data (std below unconstrained_std)
+};
+/// The planes and polygon faces of the registered bodies (boxes excluded), in the cloud's frame.
+std::vector<RegisteredPlane> RegisteredPlanes(const RegistrationSummary& summary,
+                                              const std::vector<RegistrationBody>& bodies, double max_std);
 
 /// The robot's pose in the site from a registration of SiteBodies.
 struct SiteLocalization {
   RegistrationSummary registration;
   Pose3 T_site_base{Pose3::Identity()};
   Matrix6d covariance{Matrix6d::Zero()};  ///< of T_site_base, [x y z rx ry rz] as in RegisteredBody
-  bool IsUsable() const { return registration.IsUsable(); }
+  std::vector<std::string> unconstrained;  ///< directions of the site body the cloud leaves free
+  bool IsUsable() const { return registration.IsUsable() && unconstrained.empty(); }
 };
 SiteLocalization LocalizeInSite(const std::vector<RayPoint>& cloud, const Site& site,
                                 const Pose3& T_site_base_guess, const RegistrationOptions& options = {},

@@ -6,6 +6,7 @@
 /// which face its ray hits first, and whether its ray grazes an edge (shadow points, Sec. V-B).
 
 #include <Eigen/Core>
+#include <array>
 #include <optional>
 #include <string>
 #include <utility>
@@ -23,6 +24,8 @@ struct RegistrationBody {
   Pose3 T_base_body{Pose3::Identity()};  ///< initial guess
   std::vector<RigidObject> parts;        ///< each part's T_site_object is read as T_body_part
   bool free{true};                       ///< false: held at its guess (still competes for points)
+  std::array<bool, 6> fixed{};           ///< [x y z rx ry rz] (cloud frame axes, through the body
+                                         ///< origin) held at the guess, e.g. z and tilt set by a floor
 };
 
 /// One primitive of one body, with its placement under the current poses.

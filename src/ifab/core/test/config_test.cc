@@ -53,5 +53,18 @@ TEST(Config, SequencesNameTheirIndex) {
               HasSubstr("site.yaml:3: bricks[1].size: expected a list of 3 numbers, got [0.24, -0.1]"));
 }
 
+TEST(ConfigNode, OverlayChangesOnlyTheKeysItNames) {
+  const ConfigNode shipped = ConfigNode::FromString("registration: {restarts: 2, max_iterations: 30, noise: {a: 1, b: 2}}\nother: 5\n", "shipped.yaml");
+  const ConfigNode user = ConfigNode::FromString("registration: {max_iterations: 40, noise: {b: 3}}\n", "user.yaml");
+  const ConfigNode merged = shipped.Overlay(user);
+  EXPECT_EQ(merged["registration"].Get<int>("restarts"), 2);
+  EXPECT_EQ(merged["registration"].Get<int>("max_iterations"), 40);
+  EXPECT_EQ(merged["registration"]["noise"].Get<int>("a"), 1);
+  EXPECT_EQ(merged["registration"]["noise"].Get<int>("b"), 3);
+  EXPECT_EQ(merged.Get<int>("other"), 5);
+  EXPECT_EQ(shipped["registration"].Get<int>("max_iterations"), 30);  // the base is not changed
+  EXPECT_THAT(merged["registration"].Where(), HasSubstr("user.yaml"));
+}
+
 }  // namespace
 }  // namespace ifab

@@ -1,0 +1,75 @@
+#include "ifab/perception/fit_quality.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace ifab {
+namespace {
+
+double NormalCdf(double x) { return 0.5 * std::erfc(-x / std::sqrt(2.0)); }
+
+// Inverse of the normal CDF on (0, 1) by bisection (called a few times per solve).
+double NormalQuantile(double p) {
+  double lo = -10.0, hi = 10.0;
+  for (int i = 0; i < 100; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (NormalCdf(mid) < p ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+}  // namespace
+
+double RobustScale(std::vector<double> a, double gate) {
+  if (a.empty()) return 1.0;
+  const auto mid = a.begin() + static_cast<std::ptrdiff_t>(a.size() / 2);
+  std::nth_element(a.begin(), mid, a.end());
+  const double median = *mid;
+  // Median of |z| for z ~ N(0, 1) kept only within +-gate: P(|z| < m) = P(|z| < gate) / 2.
+  const double m = gate > 0.0 ? NormalQuantile(0.5 + 0.25 * (2.0 * NormalCdf(gate) - 1.0)) : 0.674489750196;
+  return median / m;
+}
+
+FitQuality AssessFit(const std::vector<double>& whitened, double cost, int num_residuals, int num_parameters,
+                     double tolerance, bool estimated, double gate) {
+  FitQuality f;
+  f.degrees_of_freedom = std::max(1, num_residuals - num_parameters);
+  const double sum_sq = 2.0 * cost;
+  f.variance_factor = num_residuals > num_parameters ? sum_sq / f.degrees_of_freedom : 1.0;
+  // Wilson-Hilferty: (X / k)^(1/3) is about normal with mean 1 - 2 / (9k), variance 2 / (9k).
+  const double k = f.degrees_of_freedom;
+  f.chi2_z = (std::cbrt(sum_sq / k) - (1.0 - 2.0 / (9.0 * k))) / std::sqrt(2.0 / (9.0 * k));
+  std::vector<double> a;
+  a.reserve(whitened.size());
+  int within = 0;
+  for (double r : whitened) {
+    a.push_back(std::abs(r));
+    within += std::abs(r) < 1.0;
+  }
+  f.within_1sigma = whitened.empty() ? 0.0 : static_cast<double>(within) / static_cast<double>(whitened.size());
+  f.robust_scale = RobustScale(std::move(a), gate);
+  // The decision uses the robust spread, not the chi^2 score: with 10^4 and more residuals a chi^2
+  // test rejects every real laser model (range bias, mixed pixels) at any significance level,
+  // while a scale off by a factor means the gate and the loss cut at the wrong place.
+  if (whitened.empty()) {
+    f.consistent = false;
+    f.message = "no inlier to test the fit";
+  } else if (estimated) {
+    f.consistent = tolerance <= 0.0 || std::abs(std::log(f.robust_scale)) < std::log(1.1);
+    f.message = f.consistent ? "noise scale estimated from the residuals; it settled"
+                             : fmt::format("the estimated noise scale did not settle (last step off by {:.2f}x)",
+                                           f.robust_scale);
+  } else {
+    f.consistent = tolerance <= 0.0 || (f.robust_scale < tolerance && f.robust_scale > 1.0 / tolerance);
+    f.message = f.consistent ? fmt::format("residuals agree with the noise model (robust spread {:.2f} sigma)", f.robust_scale)
+                             : fmt::format("the noise model does not explain the residuals: their robust spread is "
+                                           "{:.2f} sigma of the model (tolerance {:.1f}x); give the --sensor profile "
+                                           "of this laser, or none to estimate the noise",
+                                           f.robust_scale, tolerance);
+  }
+  return f;
+}
+
+}  // namespace ifab
