@@ -27,7 +27,7 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
                 "max_localization_jump_m", "scan_distance", "scan_elevation_deg", "sweep_half_angle_deg",
                 "sweep_speed_deg_s", "crop_radius", "park_joints_deg", "localize", "place_bricks", "max_reapproaches",
                 "reapproach_tolerance", "reapproach_distance", "reapproach_speed", "tilt_compensation", "tilt_settle",
-                "tilt_window"});
+                "tilt_window", "attitude_prior_deg", "height_prior_m"});
   MissionOptions o;
   c.ReadPositive("control_period", o.control_period);
   c.ReadPositive("drive_timeout_factor", o.drive_timeout_factor);
@@ -63,6 +63,8 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
   }
   c.ReadNonNegative("tilt_settle", o.tilt_settle);
   c.ReadPositive("tilt_window", o.tilt_window);
+  c.ReadPositive("attitude_prior_deg", o.attitude_prior_deg);
+  c.ReadPositive("height_prior_m", o.height_prior_m);
   return o;
 }
 
@@ -417,7 +419,21 @@ bool Mission::Localize(VisitLog& log) {
     T_site_base_ = localized;
     // The registered full pose and the IMU's up direction while it was scanned (the sweep turns
     // only joint 1 about the vertical: the arm's moment, and so the tilt, barely changes).
-    T_site_base_ref_ = loc.T_site_base;
+    {
+      // The registered height, roll and pitch fused with the floor's prior (flat at ground_z) by
+      // their variances: the workpiece's faces pin them as well as its size allows.
+      const auto v = XyzRpyFromPose(loc.T_site_base);
+      auto fuse = [](double measured, double variance, double prior_mean, double prior_sigma) {
+        const double w = prior_sigma * prior_sigma / (prior_sigma * prior_sigma + std::max(0.0, variance));
+        return prior_mean + w * (measured - prior_mean);
+      };
+      const double var_tilt = 0.5 * (loc.covariance(3, 3) + loc.covariance(4, 4));  // about horizontal axes
+      const double sigma_tilt = DegToRad(o_.attitude_prior_deg);
+      T_site_base_ref_ = PoseFromXyzRpy(localized.x, localized.y,
+                                        fuse(v[2], loc.covariance(2, 2), c_.site.ground_z, o_.height_prior_m),
+                                        fuse(v[3], var_tilt, 0.0, sigma_tilt), fuse(v[4], var_tilt, 0.0, sigma_tilt),
+                                        localized.theta);
+    }
     up_ref_ = MeanUp(accel_, sweep_t0, sweep_t1);
     // The registered pose holds from the scan on (the base stood still): reset at the last scan
     // the estimator has seen, so the next one follows it in time.

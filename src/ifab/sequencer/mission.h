@@ -67,6 +67,12 @@ struct MissionOptions {
   Pose3 T_base_feeder{Pose3::Identity()};  ///< where the on-board feeder presents a brick
   TiltCompensation tilt_compensation{TiltCompensation::kImu};  ///< `tilt_compensation: imu | registered | none`
   double tilt_settle{0.3};           ///< [s] wait above the goal before measuring the tilt (arm at rest)
+  /// The base's attitude and height before a scan tells them: a finished floor (DIN 18202 Table
+  /// 3 row 3, 4 mm over 1 m, the site's specification) under 1.6 m of track gives a few tenths of
+  /// a degree and a few mm at most. The registered roll, pitch and height are fused with this
+  /// prior by their covariance (a small workpiece pins them loosely).
+  double attitude_prior_deg{0.1};
+  double height_prior_m{0.004};
   double tilt_window{2.0};           ///< [s] accelerometer average (80 ug/sqrt(Hz): 6e-5 rad over 2 s)
 
   static MissionOptions FromConfig(const ConfigNode& config);
