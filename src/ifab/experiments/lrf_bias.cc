@@ -8,6 +8,7 @@
 #include <fstream>
 
 #include "ifab/core/angles.h"
+#include "ifab/core/data_path.h"
 #include "ifab/core/random.h"
 #include "ifab/experiments/experiments.h"
 #include "ifab/sim/as_built.h"
@@ -23,20 +24,6 @@ nlohmann::json Run(const RunContext& ctx) {
   const auto dir = std::filesystem::path(c.file()).parent_path();
   const std::string laser_path = (dir / c.Get<std::string>("laser")).string();
   const sim::LrfOptions nominal = sim::LrfOptions::FromConfig(ConfigNode::LoadFile(laser_path)["lrf"]);
-  // A unit drawn for this seed around the nominal model (its own bias curve, noise, warm-up), as
-  // the as-built world draws its lasers; `unit: nominal` scans with the nominal model itself.
-  const std::string unit = c.Get<std::string>("unit", "drawn");
-  if (unit != "drawn" && unit != "nominal") c["unit"].Fail("drawn or nominal");
-  sim::LrfOptions options = nominal;
-  if (unit == "drawn") {
-    const auto tolerances = sim::AsBuiltTolerances::Load((dir / c.Get<std::string>("as_built")).string());
-    RandomStream unit_rng = RandomStream(ctx.seed).Derive("lrf-bias unit");
-    options = sim::DrawLrfUnit(nominal, tolerances.laser, unit_rng);
-  }
-  sim::LrfModel lrf(options);
-  double minutes_on = 60.0;  // Fig. 7 was measured on a warm unit
-  c.ReadNonNegative("minutes_since_power_on", minutes_on);
-  lrf.SetTimeSincePowerOn(60.0 * minutes_on);
   const std::vector<double> heights = c["heights_m"].AsNumbers();
   for (std::size_t i = 0; i < heights.size(); ++i)
     if (!(heights[i] > 0)) c["heights_m"][i].Fail("a positive height");
@@ -46,6 +33,21 @@ nlohmann::json Run(const RunContext& ctx) {
   c.ReadPositive("centre_deg", centre_deg);
   const auto ref = c["reference_deg"].AsNumbers(2);
   if (!(ref[0] < ref[1])) c["reference_deg"].Fail("[low, high] with low < high");
+  // A unit drawn for this seed around the nominal model (its own bias curve, noise, warm-up), as
+  // the as-built world draws its lasers; `unit: nominal` scans with the nominal model itself.
+  const std::string unit = c.Get<std::string>("unit", "drawn");
+  if (unit != "drawn" && unit != "nominal") c["unit"].Fail("drawn or nominal");
+  sim::LrfOptions options = nominal;
+  if (unit == "drawn") {
+    const auto tolerances = sim::AsBuiltTolerances::Load(
+        c.Has("as_built") ? (dir / c.Get<std::string>("as_built")).string() : DataPath("sim/as_built.yaml"));
+    RandomStream unit_rng = RandomStream(ctx.seed).Derive("lrf-bias unit");
+    options = sim::DrawLrfUnit(nominal, tolerances.laser, unit_rng);
+  }
+  sim::LrfModel lrf(options);
+  double minutes_on = 60.0;  // Fig. 7 was measured on a warm unit
+  c.ReadNonNegative("minutes_since_power_on", minutes_on);
+  lrf.SetTimeSincePowerOn(60.0 * minutes_on);
 
   Site floor_only;  // an empty lab floor
   floor_only.ground_z = 0.0;
