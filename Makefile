@@ -5,7 +5,7 @@ JOBS      ?= 2
 CMAKE_ARGS ?=
 RUN_ARGS  ?=
 
-.PHONY: all deps configure build run test bench clean
+.PHONY: all deps configure build bundle run test bench clean
 
 all: build
 
@@ -19,6 +19,11 @@ configure: deps $(BUILD_DIR)/build.ninja
 
 build: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS)
+
+# The report page's script (web/ with three.js and plotly.js, bundled by esbuild); `build` makes
+# it too, since ifab inlines it into every report.html.
+bundle: configure
+	cmake --build $(BUILD_DIR) --target report_bundle
 
 run: build
 	$(BUILD_DIR)/bin/ifab run $(RUN_ARGS)

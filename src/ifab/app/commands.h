@@ -8,6 +8,7 @@
 namespace ifab::app {
 
 void AddRunCommand(CLI::App& app, int& exit_code);
+void AddReportCommand(CLI::App& app, int& exit_code);  // report page
 void AddRobotCommand(CLI::App& app, int& exit_code);
 void AddPlanArmCommand(CLI::App& app, int& exit_code);
 void AddPlanBaseCommand(CLI::App& app, int& exit_code);

@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "ifab/app/commands.h"
+#include "ifab/experiments/report.h"
 #include "ifab/base/estimator/estimate_log.h"
 #include "ifab/core/data_path.h"
 
@@ -40,6 +41,7 @@ void AddEstimateCommand(CLI::App& app, int& exit_code) {
     }
     std::cout << ", " << m["ms_per_scan_median"].get<double>() << " ms per scan (median)\n"
               << "wrote " << args->out << "/trajectory.csv and " << args->out << "/metrics.json\n";
+    experiments::WriteReportAfterRun(args->out, true);  // DIR/report.html: trajectory, relation errors
     exit_code = 0;
   });
 }

@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
 
   int exit_code = 0;
   ifab::app::AddRunCommand(app, exit_code);
+  ifab::app::AddReportCommand(app, exit_code);
   ifab::app::AddRobotCommand(app, exit_code);
   ifab::app::AddPlanArmCommand(app, exit_code);
   ifab::app::AddPlanBaseCommand(app, exit_code);

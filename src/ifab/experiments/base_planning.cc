@@ -13,6 +13,7 @@
 #include "ifab/base/planner/site_scene.h"
 #include "ifab/core/error.h"
 #include "ifab/experiments/experiments.h"
+#include "ifab/experiments/report_data.h"
 #include "ifab/model/site.h"
 
 namespace ifab::experiments {
@@ -57,6 +58,15 @@ nlohmann::json Run(const RunContext& ctx) {
                        r.phase2_iterations, r.min_clearance, r.max_lateral_velocity, r.trajectory.Length(),
                        r.trajectory.duration);
   }
+  // For the report page: the site and the first few plans' poses, drawn in the site.
+  WriteSiteSceneJson(ctx.out_dir, site);
+  std::ofstream plans(fs::path(ctx.out_dir) / "base_planning_plans.csv");
+  plans << "case,index,x,y,theta\n";
+  for (std::size_t k = 0; k < cases.size() && k < 8; ++k)
+    for (std::size_t i = 0; i < cases[k].result.trajectory.points.size(); ++i) {
+      const Pose2& p = cases[k].result.trajectory.points[i].pose;
+      plans << fmt::format("{},{},{:.4f},{:.4f},{:.5f}\n", k, i, p.x, p.y, p.theta);
+    }
   return results;
 }
 

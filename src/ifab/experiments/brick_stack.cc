@@ -12,6 +12,7 @@
 #include "ifab/core/angles.h"
 #include "ifab/core/data_path.h"
 #include "ifab/experiments/experiments.h"
+#include "ifab/experiments/report_data.h"
 #include "ifab/perception/cloud.h"
 #include "ifab/perception/ply.h"
 #include "ifab/sequencer/laser_sweeps.h"
@@ -35,6 +36,9 @@ class RecordingRobot final : public hal::Robot {
   Seconds Now() const override { return sim_.Now(); }
   void Wait(Seconds dt) override {
     sim_.Wait(dt);
+    if (replay)
+      replay->Offer({sim_.Now(), sim_.true_base_pose(), sim_.true_joint_angles(), sim_.holding_brick(),
+                     static_cast<int>(sim_.world().bricks().size())});
     if (sim_.Now() >= next_) {
       truth.push_back({sim_.Now(), sim_.true_base_pose()});
       next_ = sim_.Now() + truth_period;
@@ -44,7 +48,10 @@ class RecordingRobot final : public hal::Robot {
   void SendJointTrajectory(const JointTrajectory& t) override { sim_.SendJointTrajectory(t); }
   bool ArmBusy() const override { return sim_.ArmBusy(); }
   void SetGripper(bool grip) override { sim_.SetGripper(grip); }
-  void SetLaserActive(DeviceId id, bool active) override { sim_.SetLaserActive(id, active); }
+  void SetLaserActive(DeviceId id, bool active) override {
+    if (replay && id == DeviceId::kArmLaser) replay->ArmLaser(sim_.Now(), active);
+    sim_.SetLaserActive(id, active);
+  }
   std::vector<LaserScan> TakeLaserScans(DeviceId id) override { return sim_.TakeLaserScans(id); }
   std::vector<GyroSample> TakeGyroSamples() override { return sim_.TakeGyroSamples(); }
   std::vector<AccelSample> TakeAccelSamples() override { return sim_.TakeAccelSamples(); }
@@ -60,6 +67,7 @@ class RecordingRobot final : public hal::Robot {
       csv << fmt::format("{:.4f},{:.5f},{:.5f},{:.6f}\n", s.t, s.value.x, s.value.y, s.value.theta);
   }
   Seconds truth_period{0.1};  ///< [s] how often the true pose is recorded
+  ReplayRecorder* replay{nullptr};  ///< samples for the report's 3D replay (optional)
 
  private:
   sim::SimRobot& sim_;
@@ -264,8 +272,14 @@ nlohmann::json Run(const RunContext& ctx) {
   const Pose2 start = plan.positions[static_cast<std::size_t>(plan.visits.front().position)].T_site_base;
   sim::SimRobot sim(sim_options, start, q0, ctx.seed);
   RecordingRobot robot(sim);
+  ReplayRecorder replay;
+  robot.replay = &replay;
   sequencer::Mission mission(robot, parts, mission_options, ctx.seed);
-  mission.on_progress = [&](const std::string& text) { ctx.Progress(text); };
+  std::size_t visits_done = 0;  // the share of the mission done, for the progress line
+  mission.on_visit_end = [&](sequencer::VisitLog&) { ++visits_done; };
+  mission.on_progress = [&](const std::string& text) {
+    ctx.Progress(text, static_cast<double>(visits_done) / static_cast<double>(plan.visits.size()));
+  };
   mission.Start(start, q0);
   const std::vector<sequencer::VisitLog> logs = mission.Run(plan);
 
@@ -333,9 +347,11 @@ nlohmann::json Run(const RunContext& ctx) {
       after_deg.Add(RadToDeg(AngleDistance(log.localized_pose, log.desired)));
     }
     if (!log.cloud.empty() && ctx.config->Get<bool>("write_clouds", true))
-      WritePly((out / fmt::format("cloud_visit_{:02d}.ply", log.visit)).string(), ToPointCloud(log.cloud));
+      WriteVisitCloud((out / fmt::format("cloud_visit_{:02d}.ply", log.visit)).string(), log);
   }
   robot.WriteTruthCsv((out / "trajectory_true.csv").string());
+  replay.Write(out.string());
+  WriteSceneJson(out.string(), parts, plan, mission.workpiece(), logs);
 
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   nlohmann::json r;

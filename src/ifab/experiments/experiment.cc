@@ -10,17 +10,17 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
-#include <mutex>
 
 #include "ifab/core/data_path.h"
 #include "ifab/core/error.h"
+#include "ifab/experiments/progress.h"
+#include "ifab/experiments/report.h"
+#include "ifab/experiments/results_table.h"
 
 namespace ifab::experiments {
 namespace fs = std::filesystem;
 
 namespace {
-std::mutex g_progress_mutex;
-
 const ExperimentInfo& Find(const std::string& name) {
   for (const auto& e : Registry())
     if (e.name == name) return e;
@@ -63,10 +63,8 @@ nlohmann::json Aggregate(const std::vector<nlohmann::json>& runs) {
 }
 }  // namespace
 
-void RunContext::Progress(const std::string& text) const {
-  if (!progress) return;
-  std::lock_guard<std::mutex> lock(g_progress_mutex);
-  std::cerr << "  " << text << "\n";
+void RunContext::Progress(const std::string& text, double fraction) const {
+  if (progress) ProgressLine::Global().Update(text, fraction);
 }
 
 nlohmann::json RunExperiment(const RunOptions& options) {
@@ -98,7 +96,7 @@ nlohmann::json RunExperiment(const RunOptions& options) {
     RunContext ctx;
     ctx.config = &config;
     ctx.seed = seed + k;
-    ctx.progress = options.progress;
+    ctx.progress = options.progress && options.runs == 1;  // --runs N: one line per finished run
     fs::path dir = out;
     if (options.runs > 1) dir = out / fmt::format("run_{:03d}", k);
     fs::create_directories(dir);
@@ -112,7 +110,11 @@ nlohmann::json RunExperiment(const RunOptions& options) {
     } catch (const std::exception& e) {
       errors[k] = e.what();
     }
+    if (options.progress && options.runs > 1) ReportRunDone(info, k, options.runs, ctx.seed, results[k], errors[k]);
   };
+  ProgressLine::Global().Restart();
+  if (options.progress && options.runs > 1)
+    ProgressLine::Global().Update(fmt::format("{} runs, {} at a time", options.runs, options.jobs), 0.0);
   if (options.runs == 1) {
     run_one(0);
   } else {
@@ -146,37 +148,16 @@ nlohmann::json RunExperiment(const RunOptions& options) {
   summary["experiment"] = options.experiment;
   WriteJson(out / "results.json", summary);
   if (options.progress) {
+    ProgressLine::Global().Finish();
     PrintResultsTable(info, summary);
     std::cerr << "results: " << (out / "results.json").string() << "\n";
   }
+  WriteReportAfterRun(out.string(), options.progress);
   return summary;
 }
 
 void PrintResultsTable(const ExperimentInfo& info, const nlohmann::json& results) {
-  std::vector<std::vector<std::string>> rows;
-  if (info.table && !results.contains("over_runs")) rows = info.table(results);
-  if (rows.empty()) {
-    // Generic: every numeric key (or its mean/worst over runs).
-    const nlohmann::json& src = results.contains("over_runs") ? results["over_runs"] : results;
-    for (const auto& [key, value] : src.items()) {
-      if (value.is_number()) {
-        rows.push_back({key, fmt::format("{:.4g}", value.get<double>()), ""});
-      } else if (value.is_object() && value.contains("mean")) {
-        rows.push_back({key, fmt::format("{:.4g} (std {:.3g}, worst {:.4g})", value["mean"].get<double>(),
-                                         value["std"].get<double>(), value["worst"].get<double>()), ""});
-      }
-    }
-    if (results.contains("failed_runs")) rows.push_back({"failed_runs", results["failed_runs"].dump(), ""});
-  }
-  std::size_t w0 = 10, w1 = 8;
-  for (const auto& r : rows) {
-    w0 = std::max(w0, r[0].size());
-    w1 = std::max(w1, r[1].size());
-  }
-  std::cout << fmt::format("\n{:<{}}  {:>{}}  {}\n", "figure", w0, "ifab", w1, "paper");
-  std::cout << std::string(w0 + w1 + 12, '-') << "\n";
-  for (const auto& r : rows) std::cout << fmt::format("{:<{}}  {:>{}}  {}\n", r[0], w0, r[1], w1, r[2]);
-  std::cout << std::flush;
+  std::cout << "\n" << FormatResultsTable(MakeResultsTable(info, results)) << std::flush;
 }
 
 }  // namespace ifab::experiments

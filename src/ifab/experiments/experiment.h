@@ -22,8 +22,9 @@ struct RunContext {
   std::uint64_t seed{0};              ///< this run's seed
   std::string out_dir;                ///< where this run writes its files (exists)
   bool progress{true};                ///< print progress to the terminal
-  /// Report progress (phase text); no-op when progress is off.
-  void Progress(const std::string& text) const;
+  /// Report progress (phase text; `fraction` of the run done in [0, 1], negative when unknown);
+  /// no-op when progress is off. A terminal shows one live line (progress.h).
+  void Progress(const std::string& text, double fraction = -1.0) const;
 };
 
 /// One run returns its results as JSON (numbers in SI units unless the key says _mm / _deg).

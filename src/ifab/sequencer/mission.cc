@@ -383,6 +383,7 @@ bool Mission::Localize(VisitLog& log) {
     model.obstacles.clear();
     const SiteLocalization loc = LocalizeInSite(log.cloud, model, T_site_base, c_.registration, true);
     log.registration_report = loc.registration.BriefReport();
+    log.cloud_labels = loc.registration.labels;
     // Trust is judged on the workpiece's pose in the base frame: that is what placing a brick
     // uses (T_site_base's position std is mostly the workpiece's yaw std times the distance).
     const RegisteredBody* workpiece = loc.registration.Find("site");

@@ -108,6 +108,7 @@ struct VisitLog {
   int reapproaches{0};               ///< straight re-approaches after the planned maneuver
   std::string registration_report;
   std::vector<RayPoint> cloud;       ///< the last assembled sweep (base frame)
+  std::vector<PointLabel> cloud_labels;  ///< the registration's label per point of `cloud` (Fig. 4)
   Pose3 T_site_base_at_scan{Pose3::Identity()};
   std::vector<int> bricks_placed;    ///< brick indices placed at this visit
   std::vector<double> tilt_change_deg;  ///< per brick placed: the measured tilt change since the scan

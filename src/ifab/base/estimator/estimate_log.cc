@@ -95,6 +95,7 @@ RelationErrors EvaluateRelations(const std::vector<Seconds>& stamps, const std::
     const Pose2 E = delta * rel.delta.inverse();
     trans.push_back(std::hypot(E.x, E.y));
     rot.push_back(RadToDeg(std::abs(WrapAngle(E.theta))));
+    out.each.push_back({rel.t1, rel.t2, trans.back(), rot.back()});
   }
   out.relations = static_cast<int>(trans.size());
   out.translation_m = ErrorStats::Of(trans);
@@ -326,6 +327,13 @@ nlohmann::json RunEstimateOnLog(const std::string& log_path, const std::string& 
                            e.matched_fraction, e.score, e.gyro_error_rad, e.iterations, ms[k],
                            log.scans[k].line);
       }
+    }
+    {
+      const std::string path = (std::filesystem::path(out_dir) / "relations.csv").string();
+      std::ofstream csv(path);
+      IFAB_THROW_UNLESS(static_cast<bool>(csv), "{}: cannot write", path);
+      csv << "t1,t2,translation_error_m,rotation_error_deg\n";
+      for (const auto& e : all.each) csv << fmt::format("{:.6f},{:.6f},{:.5f},{:.4f}\n", e[0], e[1], e[2], e[3]);
     }
     const std::string path = (std::filesystem::path(out_dir) / "metrics.json").string();
     std::ofstream out(path);

@@ -21,6 +21,7 @@
 /// drives the horizon, the gyro interval and the constant-velocity prior; the rotation input is
 /// the odometry's heading change per scan, whatever the stamps.
 
+#include <array>
 #include <nlohmann/json.hpp>
 #include <limits>
 #include <optional>
@@ -65,6 +66,9 @@ struct RelationErrors {
   int unmatched{0};            ///< relations whose t1 or t2 matched no scan stamp (not scored)
   ErrorStats translation_m;
   ErrorStats rotation_deg;
+  /// Every scored relation: t1, t2 [s], translation error [m], rotation error [deg] (the report
+  /// page draws them over time).
+  std::vector<std::array<double, 4>> each;
 };
 
 /// Score a trajectory (stamps[i], poses[i]) against relations, using those with
