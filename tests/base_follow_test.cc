@@ -21,7 +21,7 @@ namespace {
 Pose2 FacingStack(double x, double y) { return Pose2(x, y, std::atan2(-y, -x)); }
 
 TEST(BaseFollow, ControllerBringsTheSimulatedBaseAlongPlannedManeuversToTheGoal) {
-  const ConfigNode robot_yaml = ConfigNode::LoadFile(DataPath("robots/insitu_fabricator.yaml"));
+  const ConfigNode robot_yaml = ConfigNode::LoadFile(DataPath("sim/insitu_fabricator.yaml"));
   const sim::SimOptions sim_options = sim::SimOptions::FromConfig(robot_yaml["sim"]);
   const base::BaseGeometry robot = base::BaseGeometry::Load(DataPath("robots/insitu_fabricator_base.yaml"));
   const base::StompBasePlanner planner(base::PlanningSceneFromSite(LoadSite(DataPath("sites/brick_stack.yaml"))),

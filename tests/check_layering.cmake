@@ -1,5 +1,7 @@
-# Fails if an algorithm module includes a simulator header, or if its link line (as CMake
-# generated it) names the sim or experiments library. Run by ctest.
+# Fails if an algorithm module includes a simulator header, if its link line (as CMake generated
+# it) names the sim or experiments library, or if an algorithm-side loader opens the simulator's
+# parameters: a path under data/sim/, a `sim:` section of a config, or the as-built tolerances
+# (the stack reads design files only, DESIGN.md "The world and the model"). Run by ctest.
 set(algorithms core msgs model hal sync base arm perception sequencer)
 set(bad "")
 foreach(m IN LISTS algorithms)
@@ -8,6 +10,11 @@ foreach(m IN LISTS algorithms)
     file(STRINGS "${f}" hits REGEX "#include *[<\"]ifab/(sim|experiments)/")
     if(hits)
       list(APPEND bad "${f} includes ${hits}")
+    endif()
+    # Simulator parameters: data/sim/ paths, a "sim" config key, the as-built tolerances.
+    file(STRINGS "${f}" opens REGEX "[\"/]sim/|\\[ *\"sim\" *\\]|(Find|Has|Get[<>a-z:]*)\\( *\"sim\"|as_built")
+    if(opens)
+      list(APPEND bad "${f} opens the simulator's parameters: ${opens}")
     endif()
   endforeach()
   # The transitive link closure of the module's library, written at configure time.

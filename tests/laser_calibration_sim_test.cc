@@ -13,7 +13,7 @@ namespace ifab {
 namespace {
 
 TEST(CalibrateArmLaser, FindsTheSimulatedMountFromCubeSweeps) {
-  const sim::SimOptions options = sim::SimOptions::Load(DataPath("robots/insitu_fabricator.yaml"));
+  const sim::SimOptions options = sim::SimOptions::Load(DataPath("sim/insitu_fabricator.yaml"));
   ASSERT_TRUE(options.arm_laser.bias_enabled);
   const RobotModel model = LoadRobotModel(DataPath("robots/insitu_fabricator.urdf"));
   const arm::ArmOptions arm_options = arm::ArmOptions::Load(DataPath("arm/arm.yaml"));

@@ -13,10 +13,10 @@ namespace ifab {
 namespace {
 
 TEST(PickAndPlace, BricksLandWhereTheyWereAskedInTheSimulator) {
-  const ConfigNode robot_yaml = ConfigNode::LoadFile(DataPath("robots/insitu_fabricator.yaml"));
+  const ConfigNode robot_yaml = ConfigNode::LoadFile(DataPath("sim/insitu_fabricator.yaml"));
   const sim::SimOptions sim_options = sim::SimOptions::FromConfig(robot_yaml["sim"]);
   const RobotModel robot = LoadRobotModel(DataPath("robots/insitu_fabricator.urdf"));
-  const auto f = robot_yaml["feeder_in_base"].AsNumbers(6);
+  const auto f = ConfigNode::LoadFile(DataPath("robots/insitu_fabricator.yaml"))["feeder_in_base"].AsNumbers(6);
   const Pose3 T_base_feeder = PoseFromXyzRpy(f[0], f[1], f[2], f[3], f[4], f[5]);
   const Box brick{{0.240, 0.115, 0.052}};
 

@@ -17,7 +17,7 @@ namespace ifab {
 namespace {
 
 TEST(SyncWithSimulatedClocks, MapsEveryDeviceToHostTime) {
-  const sim::SimOptions o = sim::SimOptions::Load(DataPath("robots/insitu_fabricator.yaml"));
+  const sim::SimOptions o = sim::SimOptions::Load(DataPath("sim/insitu_fabricator.yaml"));
   const std::pair<DeviceId, sim::ClockOptions> devices[] = {{DeviceId::kArmLaser, o.arm_laser_clock},
                                                             {DeviceId::kArm, o.arm_clock},
                                                             {DeviceId::kBaseLaser, o.base_laser_clock},

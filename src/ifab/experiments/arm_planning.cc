@@ -7,7 +7,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "ifab/arm/planning_experiment.h"
+#include "ifab/experiments/arm_planning_experiment.h"
 #include "ifab/core/error.h"
 #include "ifab/experiments/experiments.h"
 #include "ifab/model/robot_model.h"
@@ -21,7 +21,7 @@ nlohmann::json Run(const RunContext& ctx) {
   const ConfigNode& c = *ctx.config;
   const fs::path dir = fs::path(c.file()).parent_path();
   const RobotModel robot = LoadRobotModel((dir / c.Get<std::string>("robot")).string());
-  arm::ArmPlanningExperimentConfig base;
+  ArmPlanningExperimentConfig base;
   base.ilqg = arm::LoadIlqgOptions((dir / c.Get<std::string>("arm")).string());
   if (auto robot_yaml = c.Find("robot_yaml")) {
     // The on-board feeder's brick pose (base frame), as the algorithms know it.
@@ -29,9 +29,9 @@ nlohmann::json Run(const RunContext& ctx) {
     const auto v = r["feeder_in_base"].AsNumbers(6);
     base.T_base_feeder_brick = PoseFromXyzRpy(v[0], v[1], v[2], v[3], v[4], v[5]);
   }
-  const arm::ArmPlanningExperimentConfig config = arm::ArmPlanningExperimentConfig::FromConfig(c, base);
+  const ArmPlanningExperimentConfig config = ArmPlanningExperimentConfig::FromConfig(c, base);
   ctx.Progress(fmt::format("arm-planning: {} seeded motions, iLQG on one thread", config.cases));
-  const arm::ArmPlanningResult r = arm::RunArmPlanningExperiment(robot, config, ctx.seed);
+  const ArmPlanningResult r = RunArmPlanningExperiment(robot, config, ctx.seed);
   std::ofstream csv(fs::path(ctx.out_dir) / "arm_planning_cases.csv");
   IFAB_THROW_UNLESS(csv.good(), "{}: cannot write arm_planning_cases.csv", ctx.out_dir);
   csv << r.CasesCsv();

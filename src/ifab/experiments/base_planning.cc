@@ -9,7 +9,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "ifab/base/planner/planning_experiment.h"
+#include "ifab/experiments/base_planning_experiment.h"
 #include "ifab/base/planner/site_scene.h"
 #include "ifab/core/error.h"
 #include "ifab/experiments/experiments.h"
@@ -34,16 +34,16 @@ nlohmann::json Run(const RunContext& ctx) {
   }
   options.num_threads = 1;  // plan times are single-core wall times
   c.ReadPositive("rollout_threads", options.num_threads);
-  base::BasePlanningExperimentOptions sampling;
-  if (auto s = c.Find("sampling")) sampling = base::BasePlanningExperimentOptions::FromConfig(*s);
+  BasePlanningExperimentOptions sampling;
+  if (auto s = c.Find("sampling")) sampling = BasePlanningExperimentOptions::FromConfig(*s);
   c.ReadPositive("cases", sampling.cases);
   sampling.seed = ctx.seed;
 
   const base::StompBasePlanner planner(base::PlanningSceneFromSite(site), robot, options);
   ctx.Progress(fmt::format("base-planning: {} seeded start/goal pairs, STOMP rollouts on {} thread(s)",
                            sampling.cases, options.num_threads));
-  std::vector<base::BasePlanningCase> cases;
-  nlohmann::json results = base::RunBasePlanningExperiment(planner, sampling, &cases);
+  std::vector<BasePlanningCase> cases;
+  nlohmann::json results = RunBasePlanningExperiment(planner, sampling, &cases);
 
   std::ofstream csv(fs::path(ctx.out_dir) / "base_planning_cases.csv");
   IFAB_THROW_UNLESS(csv.good(), "{}: cannot write base_planning_cases.csv", ctx.out_dir);

@@ -54,6 +54,7 @@ class RecordingRobot final : public hal::Robot {
   }
   std::vector<LaserScan> TakeLaserScans(DeviceId id) override { return sim_.TakeLaserScans(id); }
   std::vector<GyroSample> TakeGyroSamples() override { return sim_.TakeGyroSamples(); }
+  std::vector<AccelSample> TakeAccelSamples() override { return sim_.TakeAccelSamples(); }
   std::vector<JointState> TakeJointStates() override { return sim_.TakeJointStates(); }
   std::vector<SyncPulse> TakeSyncPulses() override { return sim_.TakeSyncPulses(); }
 
@@ -94,21 +95,24 @@ struct Setup {
   Vector6d q0;
   bool calibrate_mount{true};                ///< calibrate the arm laser first (else the design mount)
   sequencer::LaserCalibrationPlan calibration;  ///< how: sweeps of a cube on the floor (Sec. V-C)
+  Pose3 T_base_feeder_design{Pose3::Identity()};  ///< the feeder as designed (robot YAML)
+  bool as_built_world{true};                 ///< `world: as-built` (default) or `exact` (model = world)
+  sim::AsBuiltTolerances tolerances;         ///< data/sim/as_built.yaml (simulator only)
 };
 
-Setup LoadSetup(const ConfigNode& c) {
-  c.ExpectKeys({"seed", "robot", "site", "arm", "estimator", "planner", "controller", "base", "perception",
-                "plan", "mission", "start_joints_deg", "write_clouds", "mount", "laser_calibration", "range_bias"});
-  Setup s;
-  // The simulated machine (truth) and what the stack knows of it (design values, configs).
-  const ConfigNode robot_yaml = ConfigNode::LoadFile(Beside(c, "robot"));
-  s.sim_options = sim::SimOptions::FromConfig(robot_yaml["sim"]);
-  s.sim_options.site = Beside(c, "site");
-  if (auto b = c.Find("range_bias")) s.sim_options.arm_laser.bias_enabled = b->As<bool>();  // for comparisons
+// The path of an optional config key (relative to the config), else a file under data/.
+std::string BesideOr(const ConfigNode& c, const std::string& key, const std::string& data_default) {
+  return c.Has(key) ? Beside(c, key) : DataPath(data_default);
+}
+
+// The stack's side: design files only (the URDF, the site, the design robot YAML, algorithm
+// configs). Nothing here opens data/sim/ (tests/check_layering.cmake; brick_stack_test checks the
+// files this opens).
+void LoadStackSide(const ConfigNode& c, Setup& s) {
   sequencer::MissionComponents& parts = s.parts;
-  parts.robot = LoadRobotModel(s.sim_options.urdf);
-  parts.site = LoadSite(s.sim_options.site);
-  parts.site.RequireBoundary(s.sim_options.site, "ifab run");
+  parts.robot = LoadRobotModel(BesideOr(c, "urdf", "robots/insitu_fabricator.urdf"));
+  parts.site = LoadSite(Beside(c, "site"));
+  parts.site.RequireBoundary(Beside(c, "site"), "ifab run");
   parts.base_geometry = base::BaseGeometry::Load(Beside(c, "base"));
   parts.planner = base::StompPlannerOptions::FromConfig(ConfigNode::LoadFile(Beside(c, "planner"))["base_planner"]);
   parts.estimator = base::EstimatorOptions::FromConfig(ConfigNode::LoadFile(Beside(c, "estimator"))["estimator"]);
@@ -122,16 +126,46 @@ Setup LoadSetup(const ConfigNode& c) {
   if (auto r = perception.Find("registration")) parts.registration = RegistrationOptions::FromConfig(*r);
   if (auto sy = perception.Find("clock_sync")) parts.clock_sync = ClockSyncOptions::FromConfig(*sy);
   parts.T_tool0_arm_laser = parts.robot.T_tool0_arm_laser;  // the design mount until calibrated
+  const ConfigNode robot_yaml = ConfigNode::LoadFile(Beside(c, "robot"));
+  if (robot_yaml.Has("sim")) robot_yaml["sim"].Fail("no sim: section in a design file (it belongs in data/sim/)");
+  const auto v = robot_yaml["feeder_in_base"].AsNumbers(6);
+  s.T_base_feeder_design = PoseFromXyzRpy(v[0], v[1], v[2], v[3], v[4], v[5]);
+}
+
+// The simulator's side: its machine (data/sim/) on the design URDF and site, and, in the
+// as-built world, this seed's draws from data/sim/as_built.yaml.
+void LoadSimSide(const ConfigNode& c, Setup& s) {
+  const ConfigNode sim_yaml = ConfigNode::LoadFile(BesideOr(c, "sim", "sim/insitu_fabricator.yaml"));
+  s.sim_options = sim::SimOptions::FromConfig(sim_yaml["sim"]);
+  s.sim_options.urdf = BesideOr(c, "urdf", "robots/insitu_fabricator.urdf");
+  s.sim_options.site = Beside(c, "site");
+  if (auto b = c.Find("range_bias")) s.sim_options.arm_laser.bias_enabled = b->As<bool>();  // for comparisons
+  const std::string world = c.Get<std::string>("world", "as-built");
+  if (world != "as-built" && world != "exact") c["world"].Fail("as-built or exact");
+  s.as_built_world = world == "as-built";
+  if (s.as_built_world) s.tolerances = sim::AsBuiltTolerances::Load(BesideOr(c, "as_built", "sim/as_built.yaml"));
+}
+
+// This seed's as-built world (the same machine and floor for the calibration and the mission).
+void DrawWorld(Setup& s, std::uint64_t seed) {
+  if (!s.as_built_world) return;
+  s.sim_options.as_built = sim::DrawAsBuilt(s.tolerances, s.parts.robot, s.parts.site, s.sim_options.arm_laser, seed);
+}
+
+Setup LoadSetup(const ConfigNode& c) {
+  c.ExpectKeys({"seed", "robot", "urdf", "site", "sim", "world", "as_built", "arm", "estimator", "planner",
+                "controller", "base", "perception", "plan", "mission", "start_joints_deg", "write_clouds", "mount",
+                "laser_calibration", "range_bias"});
+  Setup s;
+  LoadStackSide(c, s);
+  LoadSimSide(c, s);
   const std::string mount = c.Get<std::string>("mount", "calibrate");
   if (mount != "calibrate" && mount != "design") c["mount"].Fail("calibrate or design");
   s.calibrate_mount = mount == "calibrate";
   if (s.calibrate_mount)
     s.calibration = sequencer::LaserCalibrationPlan::FromConfig(ConfigNode::LoadFile(Beside(c, "laser_calibration")));
   s.mission_options = sequencer::MissionOptions::FromConfig(c["mission"]);
-  {
-    const auto v = robot_yaml["feeder_in_base"].AsNumbers(6);
-    s.mission_options.T_base_feeder = PoseFromXyzRpy(v[0], v[1], v[2], v[3], v[4], v[5]);
-  }
+  s.mission_options.T_base_feeder = s.T_base_feeder_design;
   s.plan = sequencer::BuildingPlan::FromConfig(c["plan"]);
   s.q0 = s.mission_options.q_park;
   if (auto q = c.Find("start_joints_deg")) {
@@ -144,6 +178,52 @@ Setup LoadSetup(const ConfigNode& c) {
 // The arm laser's mount calibrated before the mission, as on the real machine (Sec. V-C): the same
 // simulated robot sweeps a cube standing where the stack will be, placed within a few mm of where
 // the plan says (registration finds it). Returns the mount and a summary for results.json.
+// Scoring only: what this seed's as-built world drew (results.json `as_built`).
+nlohmann::json AsBuiltSummary(const Setup& setup) {
+  const sim::AsBuilt& a = setup.sim_options.as_built;
+  if (a.exact) return {{"world", "exact"}};
+  const Site& site = setup.parts.site;
+  const sim::LrfOptions& unit = a.arm_laser;
+  const sim::LrfOptions& nominal = setup.sim_options.arm_laser;
+  auto mm3 = [](const Eigen::Vector3d& v) { return std::vector<double>{1e3 * v.x(), 1e3 * v.y(), 1e3 * v.z()}; };
+  auto mount = [](const std::array<double, 6>& m) {
+    return nlohmann::json{{"xyz_mm", {1e3 * m[0], 1e3 * m[1], 1e3 * m[2]}},
+                          {"rpy_deg", {RadToDeg(m[3]), RadToDeg(m[4]), RadToDeg(m[5])}}};
+  };
+  std::vector<double> offsets_deg;
+  for (int i = 0; i < 6; ++i) offsets_deg.push_back(RadToDeg(a.joint_offsets[i]));
+  // The arm's kinematic error at the flange, at the park pose and over a few working poses.
+  const Vector6d q_park = setup.mission_options.q_park;
+  double flange_max = 0.0;
+  RandomStream rng(1);
+  for (int k = 0; k < 20; ++k) {
+    Vector6d q = q_park;
+    for (int i = 0; i < 6; ++i) q[i] += rng.Uniform(-0.5, 0.5);
+    flange_max = std::max(flange_max, a.FlangeErrorAt(setup.parts.robot, q));
+  }
+  return {{"world", "as-built"},
+          {"brick_category", setup.tolerances.brick_category},
+          {"brick_batch_mean_deviation_mm", mm3(a.brick_mean_size - site.brick.size)},
+          {"brick_size_sigma_mm", mm3(a.brick_size_sigma)},
+          {"brick_lean_sigma_deg", RadToDeg(a.brick_lean_sigma)},
+          {"floor_worst_step_mm", {{"1m", 1e3 * a.floor_step_1m}, {"4m", 1e3 * a.floor_step_4m}}},
+          {"floor_height_at_stack_mm", 1e3 * a.floor.Height(site.stack_origin.x, site.stack_origin.y)},
+          {"base_compliance_deg_per_knm", RadToDeg(a.base_compliance) * 1e3},
+          {"base_seat_sigma_deg", RadToDeg(a.base_seat_sigma)},
+          {"arm_joint_offsets_deg", offsets_deg},
+          {"arm_flange_error_mm", {{"park", 1e3 * a.FlangeErrorAt(setup.parts.robot, q_park)}, {"max_of_20_poses", 1e3 * flange_max}}},
+          {"arm_gravity_compliance_deg_per_knm", {RadToDeg(a.gravity_compliance[0]) * 1e3, RadToDeg(a.gravity_compliance[1]) * 1e3}},
+          {"encoder_noise_deg", RadToDeg(a.encoder_noise)},
+          {"arm_laser", {{"walk_bias_at_0.4m_mm", 1e3 * unit.Bias(0.4, 0.0) - 1e3 * unit.Bias(10.0, 0.0)},
+                         {"nominal_walk_bias_at_0.4m_mm", 1e3 * nominal.Bias(0.4, 0.0) - 1e3 * nominal.Bias(10.0, 0.0)},
+                         {"bias_at_0.11m_mm", 1e3 * unit.Bias(0.11, 0.0)},
+                         {"walk_bias_cos_power", unit.walk_bias_cos_power},
+                         {"sigma_along_at_2m_mm", 1e3 * unit.SigmaAlong(2.0, 0.0)},
+                         {"warmup_amplitude_mm", 1e3 * unit.warmup_amplitude}}},
+          {"base_laser_mount_error", mount(a.base_laser_mount_error)},
+          {"arm_laser_mount_error", mount(a.arm_laser_mount_error)}};
+}
+
 Pose3 CalibrateMount(const Setup& setup, std::uint64_t seed, const RunContext& ctx, nlohmann::json* info) {
   const sequencer::LaserCalibrationPlan& plan = setup.calibration;
   RandomStream rng(seed + 7919);
@@ -152,7 +232,11 @@ Pose3 CalibrateMount(const Setup& setup, std::uint64_t seed, const RunContext& c
   const Pose3 T_site_cube = PoseFromXyzRpy(0.0, 0.0, 0.5 * plan.cube_size, 0.0, 0.0, 0.0);
   const auto b = XyzRpyFromPose(T_site_cube * T_base_cube_true.inverse());
   sim::SimRobot sim(setup.sim_options, Pose2(b[0], b[1], b[5]), plan.scan_posture, seed + 7919);
-  sim.mutable_world().AddBrick({"cube", T_site_cube, Box{Eigen::Vector3d::Constant(plan.cube_size)}});
+  // The cube stands on the floor as built (its height there; its tilt is the floor's slope of a
+  // few hundredths of a degree, left out).
+  Pose3 T_site_cube_true = T_site_cube;
+  T_site_cube_true.translation().z() = sim.world().FloorHeight(0.0, 0.0) + 0.5 * plan.cube_size;
+  sim.mutable_world().AddBrick({"cube", T_site_cube_true, Box{Eigen::Vector3d::Constant(plan.cube_size)}});
   const CalibrationSummary cs = sequencer::CalibrateArmLaser(sim, setup.parts.robot, setup.parts.arm, plan,
                                                              plan.scan_posture, [&](const std::string& t) { ctx.Progress(t); });
   if (!cs.IsUsable()) throw std::runtime_error("arm laser calibration failed: " + cs.message);
@@ -171,8 +255,13 @@ nlohmann::json Run(const RunContext& ctx) {
   const auto wall_start = std::chrono::steady_clock::now();
   const ConfigNode& c = *ctx.config;
   Setup setup = LoadSetup(c);
+  DrawWorld(setup, ctx.seed);
   nlohmann::json mount_info = {{"source", "design"}};
-  if (setup.calibrate_mount) setup.parts.T_tool0_arm_laser = CalibrateMount(setup, ctx.seed, ctx, &mount_info);
+  if (setup.calibrate_mount) {
+    setup.parts.T_tool0_arm_laser = CalibrateMount(setup, ctx.seed, ctx, &mount_info);
+    // The same lasers, warmer by the calibration's time.
+    setup.sim_options.seconds_since_power_on = mount_info["sim_seconds"].get<double>();
+  }
   const sim::SimOptions& sim_options = setup.sim_options;
   const sequencer::MissionComponents& parts = setup.parts;
   const sequencer::MissionOptions& mission_options = setup.mission_options;
@@ -283,6 +372,14 @@ nlohmann::json Run(const RunContext& ctx) {
   r["sim_seconds"] = sim.Now();
   r["wall_seconds"] = wall;
   r["arm_laser_mount"] = mount_info;
+  r["as_built"] = AsBuiltSummary(setup);
+  {
+    Stats tilt;
+    for (const auto& log : logs)
+      for (double d : log.tilt_change_deg) tilt.Add(d);
+    r["tilt_change_measured_deg_mean"] = tilt.Mean();
+    r["tilt_change_measured_deg_max"] = tilt.max;
+  }
   r["failed"] = mission.stopped() || static_cast<int>(placed.size()) < plan.TotalBricks();
   if (mission.stopped()) {
     r["failure"] = mission.stop_reason();
@@ -323,6 +420,7 @@ std::vector<std::vector<std::string>> Table(const nlohmann::json& r) {
 nlohmann::json RunManeuvers(const RunContext& ctx) {
   const auto wall_start = std::chrono::steady_clock::now();
   Setup setup = LoadSetup(*ctx.config);
+  DrawWorld(setup, ctx.seed);
   setup.mission_options.localize = false;
   setup.mission_options.place_bricks = false;
   const Pose2 start = setup.plan.positions[static_cast<std::size_t>(setup.plan.visits.front().position)].T_site_base;

@@ -8,8 +8,10 @@
 #include <fstream>
 
 #include "ifab/core/angles.h"
+#include "ifab/core/data_path.h"
 #include "ifab/core/random.h"
 #include "ifab/experiments/experiments.h"
+#include "ifab/sim/as_built.h"
 #include "ifab/sim/lrf_model.h"
 
 namespace ifab::experiments {
@@ -17,10 +19,11 @@ namespace {
 
 nlohmann::json Run(const RunContext& ctx) {
   const ConfigNode& c = *ctx.config;
-  c.ExpectKeys({"seed", "laser", "heights_m", "scans_per_height", "centre_deg", "reference_deg"});
-  const std::string laser_path =
-      (std::filesystem::path(c.file()).parent_path() / c.Get<std::string>("laser")).string();
-  const sim::LrfModel lrf(sim::LrfOptions::FromConfig(ConfigNode::LoadFile(laser_path)["lrf"]));
+  c.ExpectKeys({"seed", "laser", "unit", "as_built", "minutes_since_power_on", "heights_m", "scans_per_height",
+                "centre_deg", "reference_deg"});
+  const auto dir = std::filesystem::path(c.file()).parent_path();
+  const std::string laser_path = (dir / c.Get<std::string>("laser")).string();
+  const sim::LrfOptions nominal = sim::LrfOptions::FromConfig(ConfigNode::LoadFile(laser_path)["lrf"]);
   const std::vector<double> heights = c["heights_m"].AsNumbers();
   for (std::size_t i = 0; i < heights.size(); ++i)
     if (!(heights[i] > 0)) c["heights_m"][i].Fail("a positive height");
@@ -30,6 +33,21 @@ nlohmann::json Run(const RunContext& ctx) {
   c.ReadPositive("centre_deg", centre_deg);
   const auto ref = c["reference_deg"].AsNumbers(2);
   if (!(ref[0] < ref[1])) c["reference_deg"].Fail("[low, high] with low < high");
+  // A unit drawn for this seed around the nominal model (its own bias curve, noise, warm-up), as
+  // the as-built world draws its lasers; `unit: nominal` scans with the nominal model itself.
+  const std::string unit = c.Get<std::string>("unit", "drawn");
+  if (unit != "drawn" && unit != "nominal") c["unit"].Fail("drawn or nominal");
+  sim::LrfOptions options = nominal;
+  if (unit == "drawn") {
+    const auto tolerances = sim::AsBuiltTolerances::Load(
+        c.Has("as_built") ? (dir / c.Get<std::string>("as_built")).string() : DataPath("sim/as_built.yaml"));
+    RandomStream unit_rng = RandomStream(ctx.seed).Derive("lrf-bias unit");
+    options = sim::DrawLrfUnit(nominal, tolerances.laser, unit_rng);
+  }
+  sim::LrfModel lrf(options);
+  double minutes_on = 60.0;  // Fig. 7 was measured on a warm unit
+  c.ReadNonNegative("minutes_since_power_on", minutes_on);
+  lrf.SetTimeSincePowerOn(60.0 * minutes_on);
 
   Site floor_only;  // an empty lab floor
   floor_only.ground_z = 0.0;
@@ -69,7 +87,14 @@ nlohmann::json Run(const RunContext& ctx) {
     if (centre_n == 0 || ref_n == 0) ThrowInputError("{}: no floor points in the centre or reference band at {} m", c.file(), h);
     bumps.push_back(1000.0 * (centre_sum / centre_n - ref_sum / ref_n));
   }
-  return {{"heights_m", heights}, {"bump_height_mm", bumps}, {"scans_per_height", scans}};
+  // The unit's own walk bias at normal incidence (what the bump shows, beside the nominal model's).
+  nlohmann::json unit_info = {{"unit", unit}};
+  for (const double h : heights) {
+    unit_info["walk_bias_mm"].push_back(1e3 * (options.Bias(h, 0.0) - options.Bias(10.0, 0.0)));
+    unit_info["nominal_walk_bias_mm"].push_back(1e3 * (nominal.Bias(h, 0.0) - nominal.Bias(10.0, 0.0)));
+  }
+  unit_info["warmup_drift_mm"] = 1e3 * lrf.drift();
+  return {{"heights_m", heights}, {"bump_height_mm", bumps}, {"scans_per_height", scans}, {"laser_unit", unit_info}};
 }
 
 std::vector<std::vector<std::string>> Table(const nlohmann::json& r) {

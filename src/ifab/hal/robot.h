@@ -37,6 +37,9 @@ class Robot {
   virtual void SetLaserActive(DeviceId /*laser*/, bool /*active*/) {}
   virtual std::vector<LaserScan> TakeLaserScans(DeviceId laser) = 0;
   virtual std::vector<GyroSample> TakeGyroSamples() = 0;
+  /// The IMU's accelerometer samples (stamped like the gyro's). A robot without accelerometers
+  /// returns none, and the stack then says it cannot measure tilt.
+  virtual std::vector<AccelSample> TakeAccelSamples() { return {}; }
   virtual std::vector<JointState> TakeJointStates() = 0;
   virtual std::vector<SyncPulse> TakeSyncPulses() = 0;
 };

@@ -64,6 +64,14 @@ struct GyroSample {
   Eigen::Vector3d rate{Eigen::Vector3d::Zero()};  ///< [rad/s]
 };
 
+/// One accelerometer sample of the same IMU (MTi-G-700): specific force along the sensor axes
+/// (at rest: +g along the up direction, so roll and pitch follow). Sent in the gyro's packet:
+/// the same stamp and sync pulse as the GyroSample of that instant.
+struct AccelSample {
+  Stamp stamp;
+  Eigen::Vector3d specific_force{Eigen::Vector3d::Zero()};  ///< [m/s^2]
+};
+
 /// Measured arm joint positions and velocities.
 struct JointState {
   Stamp stamp;

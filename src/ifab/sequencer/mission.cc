@@ -4,10 +4,12 @@
 #include <spdlog/spdlog.h>
 
 #include <cmath>
+#include <algorithm>
 #include <optional>
 
 #include "ifab/core/angles.h"
 #include "ifab/core/config.h"
+#include "ifab/sequencer/tilt.h"
 
 namespace ifab::sequencer {
 namespace {
@@ -24,7 +26,8 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
                 "max_sweeps", "min_inliers", "max_localization_std_m", "max_localization_std_deg",
                 "max_localization_jump_m", "scan_distance", "scan_elevation_deg", "sweep_half_angle_deg",
                 "sweep_speed_deg_s", "crop_radius", "park_joints_deg", "localize", "place_bricks", "max_reapproaches",
-                "reapproach_tolerance", "reapproach_distance", "reapproach_speed"});
+                "reapproach_tolerance", "reapproach_distance", "reapproach_speed", "tilt_compensation", "tilt_settle",
+                "tilt_window", "attitude_prior_deg", "height_prior_m"});
   MissionOptions o;
   c.ReadPositive("control_period", o.control_period);
   c.ReadPositive("drive_timeout_factor", o.drive_timeout_factor);
@@ -51,6 +54,17 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
     const auto v = q->AsNumbers(6);
     for (int i = 0; i < 6; ++i) o.q_park[i] = DegToRad(v[static_cast<std::size_t>(i)]);
   }
+  if (auto t = c.Find("tilt_compensation")) {
+    const std::string v = t->As<std::string>();
+    if (v == "imu") o.tilt_compensation = TiltCompensation::kImu;
+    else if (v == "registered") o.tilt_compensation = TiltCompensation::kRegistered;
+    else if (v == "none") o.tilt_compensation = TiltCompensation::kNone;
+    else t->Fail("imu, registered or none");
+  }
+  c.ReadNonNegative("tilt_settle", o.tilt_settle);
+  c.ReadPositive("tilt_window", o.tilt_window);
+  c.ReadPositive("attitude_prior_deg", o.attitude_prior_deg);
+  c.ReadPositive("height_prior_m", o.height_prior_m);
   return o;
 }
 
@@ -88,6 +102,8 @@ void Mission::Start(const Pose2& T_site_base, const Vector6d& q) {
   last_scan_mid_ = robot_.Now();
   estimator_->Reset(T_site_base, last_scan_mid_);
   robot_.SetLaserActive(DeviceId::kArmLaser, false);
+  T_site_base_ref_ = Pose3Of(T_site_base);  // given, not measured: the reference until the first scan
+  up_ref_.reset();
 }
 
 void Mission::PumpSensors() {
@@ -107,6 +123,7 @@ void Mission::PumpSensors() {
   std::vector<LaserScan> base_in = robot_.TakeLaserScans(DeviceId::kBaseLaser);
   std::vector<LaserScan> arm_in = robot_.TakeLaserScans(DeviceId::kArmLaser);
   std::vector<JointState> joints_in = robot_.TakeJointStates();
+  std::vector<AccelSample> accel_in = robot_.TakeAccelSamples();
   for (const auto& g : gyro_in) sync_gyro_.AddPacket(g.stamp);
   for (const auto& s : base_in) sync_base_laser_.AddPacket(s.stamp);
   for (const auto& s : arm_in) sync_arm_laser_.AddPacket(s.stamp);
@@ -126,6 +143,15 @@ void Mission::PumpSensors() {
     if (synced(sync_arm_laser_, s.stamp, last_arm_scan_)) arm_scans_.push_back(std::move(s));
   for (auto& j : joints_in)
     if (synced(sync_arm_, j.stamp, last_joint_state_)) joint_states_.push_back(j);
+  // Accelerometer samples come in the gyro's packets: the gyro's sync maps their stamps. Only the
+  // last minute is kept (tilt is measured over windows of a second or two).
+  for (auto& a : accel_in)
+    if (sync_gyro_.Apply(a.stamp)) accel_.push_back(a);
+  if (!accel_.empty() && accel_.front().stamp.t < accel_.back().stamp.t - 60.0) {
+    const Seconds keep = accel_.back().stamp.t - 30.0;
+    accel_.erase(accel_.begin(), std::find_if(accel_.begin(), accel_.end(),
+                                              [&](const AccelSample& a) { return a.stamp.t >= keep; }));
+  }
   // While the base stands still for arm work nothing moves it: the estimator rests, and is reset
   // to the current pose before the next drive.
   if (!estimating_) {
@@ -250,6 +276,9 @@ bool Mission::Reposition(const BuildingPosition& goal, VisitLog& log) {
   trace_ = nullptr;
   estimating_ = false;
   log.end_estimate = T_site_base_;
+  // A new stop: until the workpiece is scanned here, the estimate is all there is.
+  T_site_base_ref_ = Pose3Of(T_site_base_);
+  up_ref_.reset();
   if (!arrived) spdlog::warn("{}: the controller did not reach the goal tolerance in time", goal.name);
   return true;
 }
@@ -335,7 +364,9 @@ bool Mission::Localize(VisitLog& log) {
     arm_scans_.clear();
     joint_states_.clear();
     robot_.SetLaserActive(DeviceId::kArmLaser, true);  // the arm laser works only for sweeps
+    const Seconds sweep_t0 = robot_.Now();
     const bool sweep_ok = RunArm(sweep_steps, "scan sweep");
+    const Seconds sweep_t1 = robot_.Now();
     robot_.SetLaserActive(DeviceId::kArmLaser, false);
     if (!sweep_ok) return false;
     ++log.sweeps;
@@ -387,6 +418,24 @@ bool Mission::Localize(VisitLog& log) {
     log.localized_pose = localized;
     log.T_site_base_at_scan = T_site_base;
     T_site_base_ = localized;
+    // The registered full pose and the IMU's up direction while it was scanned (the sweep turns
+    // only joint 1 about the vertical: the arm's moment, and so the tilt, barely changes).
+    {
+      // The registered height, roll and pitch fused with the floor's prior (flat at ground_z) by
+      // their variances: the workpiece's faces pin them as well as its size allows.
+      const auto v = XyzRpyFromPose(loc.T_site_base);
+      auto fuse = [](double measured, double variance, double prior_mean, double prior_sigma) {
+        const double w = prior_sigma * prior_sigma / (prior_sigma * prior_sigma + std::max(0.0, variance));
+        return prior_mean + w * (measured - prior_mean);
+      };
+      const double var_tilt = 0.5 * (loc.covariance(3, 3) + loc.covariance(4, 4));  // about horizontal axes
+      const double sigma_tilt = DegToRad(o_.attitude_prior_deg);
+      T_site_base_ref_ = PoseFromXyzRpy(localized.x, localized.y,
+                                        fuse(v[2], loc.covariance(2, 2), c_.site.ground_z, o_.height_prior_m),
+                                        fuse(v[3], var_tilt, 0.0, sigma_tilt), fuse(v[4], var_tilt, 0.0, sigma_tilt),
+                                        localized.theta);
+    }
+    up_ref_ = MeanUp(accel_, sweep_t0, sweep_t1);
     // The registered pose holds from the scan on (the base stood still): reset at the last scan
     // the estimator has seen, so the next one follows it in time.
     estimator_->Reset(localized, last_scan_mid_, /*keep_references=*/true);
@@ -396,14 +445,48 @@ bool Mission::Localize(VisitLog& log) {
   return false;
 }
 
+Pose3 Mission::PlacingPose(VisitLog& log) {
+  robot_.Wait(o_.tilt_settle);
+  PumpSensors();
+  const Seconds t0 = robot_.Now();
+  robot_.Wait(o_.tilt_window);
+  PumpSensors();
+  const std::optional<Eigen::Vector3d> up_now = MeanUp(accel_, t0, robot_.Now());
+  if (!up_now) {
+    if (!warned_no_accel_) spdlog::warn("no accelerometer data: the base's tilt change is not compensated");
+    warned_no_accel_ = true;
+    return T_site_base_ref_;
+  }
+  if (!up_ref_) up_ref_ = up_now;  // no scan at this stop (the start): the first placement is the reference
+  log.tilt_change_deg.push_back(RadToDeg(TiltAngle(*up_ref_, *up_now)));
+  return CompensateTilt(T_site_base_ref_, *up_ref_, *up_now);
+}
+
 bool Mission::PlaceBrick(int k, VisitLog& log) {
-  const Pose3 T_site_base = Pose3Of(T_site_base_);
+  const bool full_pose = o_.tilt_compensation != TiltCompensation::kNone;
+  const Pose3 T_site_base = full_pose ? T_site_base_ref_ : Pose3Of(T_site_base_);
   const Pose3 T_site_feeder = T_site_base * o_.T_base_feeder;
   const Pose3 T_site_goal = workpiece_.DesignedBrickPose(k);
   Progress(fmt::format("{}: picking brick {} from the feeder", log.position, k + 1));
   if (!RunArm(arm_->PickBrick(q_, T_site_base, T_site_feeder, c_.site.brick), "pick brick")) return false;
   Progress(fmt::format("{}: placing brick {}", log.position, k + 1));
-  if (!RunArm(arm_->PlaceBrick(q_, T_site_base, T_site_goal, c_.site.brick), "place brick")) return false;
+  if (o_.tilt_compensation == TiltCompensation::kImu) {
+    // Above the goal first (the arm out, the brick held: the base leans as it will when placing),
+    // then measure the tilt and plan the descent on the compensated pose.
+    arm::PrimitiveResult plan = arm_->PlaceBrick(q_, T_site_base, T_site_goal, c_.site.brick);
+    if (plan.ok && !plan.steps.empty() && !plan.steps.front().trajectory.points.empty()) {
+      arm::PrimitiveResult above;
+      above.steps.push_back(plan.steps.front());
+      above.q_end = plan.steps.front().trajectory.points.back().q;
+      if (!RunArm(above, "move above the brick goal")) return false;
+    } else if (!plan.ok) {
+      return RunArm(plan, "place brick");  // stops safely with the planner's message
+    }
+    const Pose3 T_site_base_now = PlacingPose(log);
+    if (!RunArm(arm_->PlaceBrick(q_, T_site_base_now, T_site_goal, c_.site.brick), "place brick")) return false;
+  } else if (!RunArm(arm_->PlaceBrick(q_, T_site_base, T_site_goal, c_.site.brick), "place brick")) {
+    return false;
+  }
   workpiece_.bricks.push_back({fmt::format("brick_{}", k), T_site_goal, c_.site.brick});
   log.bricks_placed.push_back(k);
   ++bricks_placed_;

@@ -102,6 +102,35 @@ Eigen::Vector3d Gyro::Measure(const Eigen::Vector3d& omega) {
   return out;
 }
 
+AccelOptions AccelOptions::FromConfig(const ConfigNode& c) {
+  c.ExpectKeys({"noise_density_ug_sqrt_hz", "bias_stability_ug", "turn_on_bias_sigma_mg", "range_m_s2"});
+  AccelOptions o;
+  c.ReadNonNegative("noise_density_ug_sqrt_hz", o.noise_density_ug_sqrt_hz);
+  c.ReadNonNegative("bias_stability_ug", o.bias_stability_ug);
+  c.ReadNonNegative("turn_on_bias_sigma_mg", o.turn_on_bias_sigma_mg);
+  c.ReadPositive("range_m_s2", o.range_m_s2);
+  return o;
+}
+
+Accelerometer::Accelerometer(AccelOptions options, double rate_hz, RandomStream rng)
+    : o_(options), rate_hz_(rate_hz), rng_(std::move(rng)) {
+  for (int k = 0; k < 3; ++k) bias_[k] = 9.80665e-3 * rng_.Normal(o_.turn_on_bias_sigma_mg);
+}
+
+Eigen::Vector3d Accelerometer::Measure(const Eigen::Vector3d& f) {
+  constexpr double kG = 9.80665;
+  const double dt = 1.0 / rate_hz_;
+  const double white = kG * 1e-6 * o_.noise_density_ug_sqrt_hz * std::sqrt(rate_hz_);
+  // Bias random walk whose drift over 100 s matches the in-run stability figure (as the gyro's).
+  const double walk = kG * 1e-6 * o_.bias_stability_ug / std::sqrt(100.0) * std::sqrt(dt);
+  Eigen::Vector3d out;
+  for (int k = 0; k < 3; ++k) {
+    bias_[k] += rng_.Normal(walk);
+    out[k] = std::clamp(f[k] + bias_[k] + rng_.Normal(white), -o_.range_m_s2, o_.range_m_s2);
+  }
+  return out;
+}
+
 ClockOptions ClockOptions::FromConfig(const ConfigNode& c) {
   c.ExpectKeys({"offset", "skew_ppm", "stamp_jitter", "latency_mean", "latency_min", "pulse_jitter",
                 "pulse_late_probability", "pulse_late_max"});

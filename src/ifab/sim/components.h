@@ -84,6 +84,30 @@ class Gyro {
   Eigen::Vector3d bias_{Eigen::Vector3d::Zero()};
 };
 
+/// The IMU's accelerometers (Xsens MTi-G-700): specific force with white noise, a turn-on bias
+/// and a bias random walk; sampled with the gyro (one packet, one time stamp).
+struct AccelOptions {
+  double noise_density_ug_sqrt_hz{80.0};  ///< [micro-g / sqrt(Hz)]
+  double bias_stability_ug{40.0};         ///< in-run bias stability [micro-g]
+  double turn_on_bias_sigma_mg{0.5};      ///< residual turn-on bias [milli-g]
+  double range_m_s2{50.0};                ///< full range [m/s^2]
+  static AccelOptions FromConfig(const ConfigNode& config);
+};
+
+class Accelerometer {
+ public:
+  Accelerometer(AccelOptions options, double rate_hz, RandomStream rng);
+  /// Measured specific force for the true one `f` [m/s^2] (sensor axes).
+  Eigen::Vector3d Measure(const Eigen::Vector3d& f);
+  const Eigen::Vector3d& bias() const { return bias_; }
+
+ private:
+  AccelOptions o_;
+  double rate_hz_;
+  RandomStream rng_;
+  Eigen::Vector3d bias_{Eigen::Vector3d::Zero()};
+};
+
 /// A device's clock and link: t_device = (1 + skew) t + offset + jitter; packets reach the host
 /// after a random transport delay; the device's sync pulse is time stamped by the host's
 /// acquisition hardware with a small jitter, and now and then late.
@@ -131,6 +155,8 @@ class ArmServo {
   void Step(double dt, Seconds t_now);
   bool Busy(Seconds t_now) const;
   const Vector6d& q_reported() const { return q_; }
+  /// Replace the drawn zero offsets (the as-built arm's own).
+  void set_offsets(const Vector6d& offsets) { offsets_ = offsets; }
   const Vector6d& qd() const { return qd_; }
   /// Physical joint angles (reported + encoder offsets): what FK of the real arm uses.
   Vector6d q_physical() const { return q_ + offsets_; }

@@ -83,6 +83,45 @@ double LrfOptions::Bias(double range, double incidence) const {
   return Lookup(near_bias_range_m, near_bias_m, range) + Lookup(walk_bias_range_m, walk_bias_m, range) * cp;
 }
 
+double LrfOptions::SigmaAlong(double range, double incidence) const {
+  const double base = sigma_along_table_m.empty() ? sigma_along : Lookup(sigma_along_range_m, sigma_along_table_m, range);
+  if (sigma_incidence_gain == 0.0) return base;
+  const double c = std::max(0.5, std::cos(incidence));
+  return base * std::min(2.0, 1.0 + sigma_incidence_gain * (1.0 / c - 1.0));
+}
+
+LrfUnitTolerances LrfUnitTolerances::FromConfig(const ConfigNode& c) {
+  LrfUnitTolerances o;
+  c.ReadNonNegative("walk_bias_scale_sigma", o.walk_bias_scale_sigma);
+  c.ReadNonNegative("walk_bias_cos_power_sigma", o.walk_bias_cos_power_sigma);
+  c.ReadNonNegative("near_bias_shift_sigma_m", o.near_bias_shift_sigma_m);
+  ReadTable(c, "sigma_along_range_m", "sigma_along_m", o.sigma_along_range_m, o.sigma_along_m);
+  c.ReadNonNegative("sigma_incidence_gain", o.sigma_incidence_gain);
+  c.ReadNonNegative("sigma_unit_scale_sigma", o.sigma_unit_scale_sigma);
+  c.ReadNonNegative("warmup_amplitude_sigma_m", o.warmup_amplitude_sigma_m);
+  c.ReadPositive("warmup_tau_s", o.warmup_tau_s);
+  return o;
+}
+
+LrfOptions DrawLrfUnit(const LrfOptions& nominal, const LrfUnitTolerances& t, RandomStream& rng) {
+  LrfOptions o = nominal;
+  const double walk_scale = std::max(0.0, 1.0 + rng.Normal(t.walk_bias_scale_sigma));
+  for (double& b : o.walk_bias_m) b *= walk_scale;
+  o.walk_bias_cos_power = std::max(1.0, std::round(nominal.walk_bias_cos_power + rng.Normal(t.walk_bias_cos_power_sigma)));
+  // The near-field term shifts where it is non-zero (it still fades to 0 at the table's end).
+  const double shift = rng.Normal(t.near_bias_shift_sigma_m);
+  for (std::size_t i = 0; i + 1 < o.near_bias_m.size(); ++i) o.near_bias_m[i] += shift;
+  const double noise_scale = std::max(0.3, 1.0 + rng.Normal(t.sigma_unit_scale_sigma));
+  o.sigma_along_range_m = t.sigma_along_range_m;
+  o.sigma_along_table_m = t.sigma_along_m;
+  for (double& s : o.sigma_along_table_m) s *= noise_scale;
+  o.sigma_along = noise_scale * nominal.sigma_along;
+  o.sigma_incidence_gain = t.sigma_incidence_gain;
+  o.warmup_amplitude = rng.Normal(t.warmup_amplitude_sigma_m);
+  o.warmup_tau = t.warmup_tau_s;
+  return o;
+}
+
 BeamSample LrfModel::Measure(const World& world, const Eigen::Vector3d& origin, const Eigen::Vector3d& d,
                              const Eigen::Vector3d& u, const Eigen::Vector3d& w,
                              const std::optional<WorldHit>& nominal, bool near_edge, RandomStream& rng) const {
@@ -129,8 +168,8 @@ BeamSample LrfModel::Measure(const World& world, const Eigen::Vector3d& origin, 
       }
     }
   }
-  range += o.Bias(range, incidence);
-  if (noisy) range += rng.Normal(o.sigma_along);
+  range += o.Bias(range, incidence) + drift_;
+  if (noisy) range += rng.Normal(o.SigmaAlong(range, incidence));
   if (range < o.range_min || range > o.range_max) return out;
   out.range = range;
   return out;

@@ -6,6 +6,7 @@
 /// point lands off the surface it seems to lie on); a short-range bias that depends on range and
 /// incidence (paper Fig. 7); mixed pixels at depth edges; beams with no return; dropped scans.
 
+#include <cmath>
 #include <vector>
 
 #include "ifab/core/random.h"
@@ -44,6 +45,12 @@ struct LrfOptions {
   double dropped_scan_probability{0.002}; ///< whole scans lost in transport
   bool bias_enabled{true};            ///< switch the short-range bias off (for comparisons)
   bool noise_enabled{true};           ///< switch all noise off (for tests)
+  // A drawn unit (as-built world, DrawLrfUnit); the defaults leave the nominal model unchanged.
+  std::vector<double> sigma_along_range_m;  ///< range noise table (empty: sigma_along at any range)
+  std::vector<double> sigma_along_table_m;
+  double sigma_incidence_gain{0.0};   ///< sigma grows by gain (1/cos(incidence) - 1), at most 2x
+  double warmup_amplitude{0.0};       ///< [m] range drift amplitude * exp(-t / warmup_tau) after power-on
+  double warmup_tau{1200.0};          ///< [s]
 
   static LrfOptions FromConfig(const ConfigNode& config);
   double SigmaAcross(double range) const { return sigma_across_per_m * range + sigma_across_const; }
@@ -51,7 +58,26 @@ struct LrfOptions {
   double TimeIncrement() const { return scan_period * sweep_fraction / (beams - 1); }
   /// Range bias at range r and incidence angle (0 = normal) [m], positive = reads long.
   double Bias(double range, double incidence) const;
+  /// Range noise's sigma at range r and incidence [m].
+  double SigmaAlong(double range, double incidence) const;
 };
+
+/// How UTM-30LX units differ from the nominal model (data/sim/as_built.yaml `lasers:`).
+struct LrfUnitTolerances {
+  double walk_bias_scale_sigma{0.15};       ///< each unit's walk term = nominal * N(1, sigma)
+  double walk_bias_cos_power_sigma{1.0};    ///< its incidence power = nominal + N(0, sigma)
+  double near_bias_shift_sigma_m{0.002};    ///< its near-field term shifted by N(0, sigma) [m]
+  std::vector<double> sigma_along_range_m{0.1, 2.0};  ///< range noise table (Pomerleau et al. 2012)
+  std::vector<double> sigma_along_m{0.005, 0.018};
+  double sigma_incidence_gain{0.3};
+  double sigma_unit_scale_sigma{0.1};       ///< each unit's noise = table * N(1, sigma)
+  double warmup_amplitude_sigma_m{0.002};   ///< warm-up drift amplitude N(0, sigma) [m]
+  double warmup_tau_s{1200.0};              ///< [s]
+  static LrfUnitTolerances FromConfig(const ConfigNode& config);
+};
+
+/// One unit drawn around the nominal model: its own range-bias curve, noise and warm-up drift.
+LrfOptions DrawLrfUnit(const LrfOptions& nominal, const LrfUnitTolerances& tolerances, RandomStream& rng);
 
 /// One simulated beam, with the quantities a test needs to check the model.
 struct BeamSample {
@@ -65,6 +91,11 @@ class LrfModel {
  public:
   explicit LrfModel(LrfOptions options) : options_(std::move(options)) {}
   const LrfOptions& options() const { return options_; }
+  /// The unit has been on for t seconds: its warm-up drift now.
+  void SetTimeSincePowerOn(double t) {
+    drift_ = options_.warmup_amplitude == 0.0 ? 0.0 : options_.warmup_amplitude * std::exp(-t / options_.warmup_tau);
+  }
+  double drift() const { return drift_; }
 
   /// One beam from `origin` along nominal unit direction `d` with in-plane perpendicular `u`
   /// (the direction of increasing beam angle) and out-of-plane normal `w`.
@@ -136,6 +167,7 @@ class LrfModel {
                      bool near_edge, RandomStream& rng) const;
 
   LrfOptions options_;
+  double drift_{0.0};  // [m] warm-up drift added to every range
   mutable std::vector<Ray> rays_;  // scratch of Scan(); an LrfModel is not shared across threads
 };
 

@@ -11,6 +11,7 @@
 
 #include "ifab/hal/robot.h"
 #include "ifab/model/robot_model.h"
+#include "ifab/sim/as_built.h"
 #include "ifab/sim/components.h"
 #include "ifab/sim/lrf_model.h"
 #include "ifab/sim/world.h"
@@ -35,8 +36,12 @@ struct SimOptions {
   Pose3 T_base_feeder{Pose3::Identity()};  ///< where the on-board feeder presents a brick (centre)
   double feeder_sigma_xy{0.0003};       ///< [m] how precisely the feeder presents a brick
   double feeder_sigma_yaw_deg{0.05};
+  AccelOptions accel;                   ///< the IMU's accelerometers (same device and clock as the gyro)
+  /// The as-built world and machine (DrawAsBuilt); default: the exact world (model = world).
+  AsBuilt as_built;
+  double seconds_since_power_on{0.0};   ///< [s] the lasers' warm-up at t = 0 (after an earlier session)
 
-  /// Read data/robots/insitu_fabricator.yaml's `sim:` section and the sensor files it names.
+  /// Read data/sim/insitu_fabricator.yaml's `sim:` section and the sensor files it names.
   static SimOptions Load(const std::string& robot_yaml);
   static SimOptions FromConfig(const ConfigNode& config);
 };
@@ -55,6 +60,7 @@ class SimRobot final : public hal::Robot {
   void SetLaserActive(DeviceId laser, bool active) override;
   std::vector<LaserScan> TakeLaserScans(DeviceId laser) override;
   std::vector<GyroSample> TakeGyroSamples() override;
+  std::vector<AccelSample> TakeAccelSamples() override;
   std::vector<JointState> TakeJointStates() override;
   std::vector<SyncPulse> TakeSyncPulses() override;
 
@@ -63,6 +69,10 @@ class SimRobot final : public hal::Robot {
   World& mutable_world() { return world_; }
   const RobotModel& robot_model() const { return robot_; }
   Pose2 true_base_pose() const { return base_.pose(); }
+  /// The base's true pose in the site with its height and tilt on the floor (as built).
+  Pose3 true_T_site_base() const { return T_site_base_; }
+  /// Command an extra base tilt (roll, pitch [rad]) on top of the as-built one (tests).
+  void set_extra_tilt(double roll, double pitch) { extra_tilt_ = {roll, pitch}; }
   void teleport_base(const Pose2& p) { base_.set_pose(p); }
   Pose3 true_T_tool0_arm_laser() const { return T_tool0_arm_laser_true_; }
   Pose3 true_T_base_base_laser() const { return T_base_base_laser_true_; }
@@ -83,12 +93,17 @@ class SimRobot final : public hal::Robot {
  private:
   struct Snapshot {
     Seconds t;
-    Pose2 base;
+    Pose3 T_site_base;
     Vector6d q;
   };
   void Step();
-  Pose3 TrueSiteBase(const Pose2& p) const;
-  Pose3 ArmLaserPose(const Pose2& base, const Vector6d& q_physical) const;
+  /// The base on the floor at planar pose p with the arm at q: floor plane under the tracks,
+  /// how the tracks seated at this stop, and the tilt from the arm's moment (as built).
+  Pose3 TrueSiteBase(const Pose2& p, const Vector6d& q_physical) const;
+  /// Link angles: the physical joint angles plus gravity's deflection of joints 2 and 3.
+  Vector6d LinkAngles(const Vector6d& q_physical) const;
+  Pose3 ArmLaserPose(const Pose3& T_site_base, const Vector6d& q_physical) const;
+  Snapshot Now3() const { return {t_, T_site_base_, servo_.q_physical()}; }
   void PresentFeederBrick();
 
   SimOptions options_;
@@ -98,6 +113,7 @@ class SimRobot final : public hal::Robot {
   TrackedBase base_;
   ArmServo servo_;
   Gyro gyro_;
+  Accelerometer accel_;
   LrfModel base_lrf_, arm_lrf_;
   DeviceClock base_laser_clock_, arm_laser_clock_, gyro_clock_, arm_clock_;
   RandomStream base_lrf_rng_, arm_lrf_rng_, gripper_rng_;
@@ -109,6 +125,14 @@ class SimRobot final : public hal::Robot {
   Snapshot base_scan_start_{}, arm_scan_start_{};
   std::vector<LaserScan> base_scans_, arm_scans_;
   std::vector<GyroSample> gyro_samples_;
+  std::vector<AccelSample> accel_samples_;
+  Pose3 T_site_base_{Pose3::Identity()};  ///< true base pose now (with tilt)
+  Eigen::Vector2d seat_{Eigen::Vector2d::Zero()};  ///< roll, pitch of how the tracks seated at this stop
+  Eigen::Vector2d extra_tilt_{Eigen::Vector2d::Zero()};
+  bool base_moving_{false};
+  double v_prev_{0.0};
+  RandomStream seat_rng_, encoder_rng_;
+  std::vector<double> brick_leans_;  ///< per feeder brick: lean about its x and y [rad] (as built)
   std::vector<JointState> joint_states_;
   std::vector<SyncPulse> pulses_;
 

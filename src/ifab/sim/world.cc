@@ -1,6 +1,7 @@
 #include "ifab/sim/world.h"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 namespace ifab::sim {
@@ -10,7 +11,36 @@ Pose3 Inverse(const Pose3& p) { return p.inverse(Eigen::Isometry); }
 
 }  // namespace
 
-World::World(Site site) : site_(std::move(site)) { Rebuild(); }
+double FloorField::Height(double x, double y) const {
+  double h = 0.0;
+  for (const Wave& w : waves) h += w.amplitude * std::sin(w.k.x() * x + w.k.y() * y + w.phase);
+  return h;
+}
+
+Eigen::Vector2d FloorField::Gradient(double x, double y) const {
+  Eigen::Vector2d g = Eigen::Vector2d::Zero();
+  for (const Wave& w : waves) g += w.amplitude * std::cos(w.k.x() * x + w.k.y() * y + w.phase) * w.k;
+  return g;
+}
+
+double FloorField::WorstStep(double distance, const Eigen::Vector2d& lo, const Eigen::Vector2d& hi) const {
+  double worst = 0.0;
+  const double step = std::max(0.05, std::min(0.25, distance / 4));
+  for (double x = lo.x(); x <= hi.x(); x += step) {
+    for (double y = lo.y(); y <= hi.y(); y += step) {
+      for (int a = 0; a < 8; ++a) {  // chords in 8 directions from (x, y)
+        const double ang = a * EIGEN_PI / 8;
+        const double x1 = x + distance * std::cos(ang), y1 = y + distance * std::sin(ang);
+        if (x1 < lo.x() || x1 > hi.x() || y1 < lo.y() || y1 > hi.y()) continue;
+        const double mid = Height(0.5 * (x + x1), 0.5 * (y + y1));
+        worst = std::max(worst, std::abs(mid - 0.5 * (Height(x, y) + Height(x1, y1))));
+      }
+    }
+  }
+  return worst;
+}
+
+World::World(Site site, FloorField floor) : site_(std::move(site)), floor_(std::move(floor)) { Rebuild(); }
 
 void World::Rebuild() {
   statics_.clear();
@@ -35,16 +65,8 @@ void World::AddBrick(const SiteBox& brick) {
 
 std::optional<WorldHit> World::CastRay(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min,
                                        double t_max) const {
-  std::optional<WorldHit> best;
-  double t_best = t_max;
-  // Ground plane z = ground_z, seen from above.
-  if (d.z() < -1e-12) {
-    const double t = (site_.ground_z - o.z()) / d.z();
-    if (t > t_min && t < t_best) {
-      t_best = t;
-      best = WorldHit{t, Eigen::Vector3d::UnitZ(), -1};
-    }
-  }
+  std::optional<WorldHit> best = IntersectGround(o, d, t_min, t_max);
+  double t_best = best ? best->range : t_max;
   const Eigen::Vector3d inv_d = d.cwiseInverse();
   auto cast_group = [&](const std::vector<Entry>& entries, int index_offset) {
     for (std::size_t k = 0; k < entries.size(); ++k) {
@@ -65,8 +87,38 @@ std::optional<WorldHit> World::CastRay(const Eigen::Vector3d& o, const Eigen::Ve
   return best;
 }
 
+std::optional<WorldHit> World::IntersectGround(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min,
+                                               double t_max) const {
+  if (d.z() > -1e-12) return std::nullopt;  // the floor is seen from above only
+  double t = (site_.ground_z - o.z()) / d.z();
+  if (floor_.flat()) {
+    if (t > t_min && t < t_max) return WorldHit{t, Eigen::Vector3d::UnitZ(), -1};
+    return std::nullopt;
+  }
+  // f(t) = ray height - floor height; the field is smooth and gentle (slopes of 1e-2), so Newton
+  // from the flat floor's hit converges in a few steps for any ray steeper than the slope.
+  for (int it = 0; it < 8; ++it) {
+    const Eigen::Vector3d p = o + t * d;
+    const double f = p.z() - FloorHeight(p.x(), p.y());
+    const double df = d.z() - floor_.Gradient(p.x(), p.y()).dot(d.head<2>());
+    if (df > -1e-9) return std::nullopt;  // grazing the field: treat as no floor hit
+    const double dt = f / df;
+    t -= dt;
+    if (std::abs(dt) < 1e-7) break;
+  }
+  if (!(t > t_min && t < t_max)) return std::nullopt;
+  const Eigen::Vector3d p = o + t * d;
+  const Eigen::Vector2d g = floor_.Gradient(p.x(), p.y());
+  return WorldHit{t, Eigen::Vector3d(-g.x(), -g.y(), 1.0).normalized(), -1};
+}
+
 double World::SupportHeight(double x, double y, double half_extent) const {
   double top = site_.ground_z;
+  if (!floor_.flat()) {  // the highest floor point under the footprint (centre and corners)
+    top = -std::numeric_limits<double>::infinity();
+    for (double sx : {-1.0, 0.0, 1.0})
+      for (double sy : {-1.0, 0.0, 1.0}) top = std::max(top, FloorHeight(x + sx * half_extent, y + sy * half_extent));
+  }
   auto consider = [&](const std::vector<Entry>& entries) {
     for (const auto& e : entries) {
       if (x + half_extent < e.bounds.lo.x() || x - half_extent > e.bounds.hi.x() ||

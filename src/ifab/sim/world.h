@@ -12,6 +12,26 @@
 
 namespace ifab::sim {
 
+/// An uneven floor: ground_z plus a smooth height field, a sum of plane waves (as-built draw,
+/// data/sim/as_built.yaml). Empty: the flat floor z = ground_z.
+struct FloorField {
+  struct Wave {
+    Eigen::Vector2d k{Eigen::Vector2d::Zero()};  ///< wave vector [rad/m]
+    double amplitude{0.0};                       ///< [m]
+    double phase{0.0};                           ///< [rad]
+  };
+  std::vector<Wave> waves;
+  bool flat() const { return waves.empty(); }
+  /// Height above ground_z at (x, y) [m].
+  double Height(double x, double y) const;
+  /// d(height)/dx, d(height)/dy.
+  Eigen::Vector2d Gradient(double x, double y) const;
+  /// The DIN 18202 step measure over points `distance` apart: the largest deviation of the floor
+  /// at a chord's midpoint from the straight line through its ends, over a grid of chords in the
+  /// box [lo, hi] [m].
+  double WorstStep(double distance, const Eigen::Vector2d& lo, const Eigen::Vector2d& hi) const;
+};
+
 struct WorldHit {
   double range{0.0};                                 ///< distance along the ray [m]
   Eigen::Vector3d normal{Eigen::Vector3d::UnitZ()};  ///< surface normal at the hit (site frame)
@@ -20,12 +40,15 @@ struct WorldHit {
 
 class World {
  public:
-  explicit World(Site site);
+  explicit World(Site site, FloorField floor = {});
 
   const Site& site() const { return site_; }
   /// Add a brick (true pose) to the world.
   void AddBrick(const SiteBox& brick);
   const std::vector<SiteBox>& bricks() const { return site_.bricks; }
+  const FloorField& floor() const { return floor_; }
+  /// Floor height at (x, y) in the site frame [m].
+  double FloorHeight(double x, double y) const { return site_.ground_z + floor_.Height(x, y); }
 
   /// First surface hit by the ray origin + t * direction (|direction| = 1), t in (t_min, t_max).
   std::optional<WorldHit> CastRay(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
@@ -42,8 +65,13 @@ class World {
     Aabb bounds;
   };
   void Rebuild();
+  /// The ray's first hit on the floor within (t_min, t_max) (flat: one plane; uneven: Newton on
+  /// the height field from the flat floor's hit).
+  std::optional<WorldHit> IntersectGround(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min,
+                                          double t_max) const;
 
   Site site_;
+  FloorField floor_;
   std::vector<Entry> statics_;  // walls and obstacles
   std::vector<Entry> bricks_;
   Aabb bricks_bounds_;

@@ -2,7 +2,6 @@
 
 #include <gtest/gtest.h>
 
-#include "ifab/arm/planning_experiment.h"
 #include "ifab/core/angles.h"
 #include "ifab/core/config.h"
 #include "ifab/core/data_path.h"
@@ -172,18 +171,6 @@ TEST_F(IlqgTest, OptionsFromYamlRejectTypos) {
   const IlqgOptions o = IlqgOptions::FromConfig(ConfigNode::FromString("dt: 0.05\nmax_iterations: 7"));
   EXPECT_EQ(o.dt, 0.05);
   EXPECT_EQ(o.max_iterations, 7);
-}
-
-// The bar on seeded point-to-point motions (speed is measured in bench/, not here).
-TEST_F(IlqgTest, SeededBrickMotionsAllConvergeInFewIterations) {
-  ArmPlanningExperimentConfig config;
-  config.ilqg = options_;
-  config.cases = 40;
-  const ArmPlanningResult r = RunArmPlanningExperiment(robot_, config, 7);
-  EXPECT_EQ(r.results["cases"].get<int>(), 40);
-  EXPECT_EQ(r.results["converged_rate"].get<double>(), 1.0) << r.CasesCsv();
-  EXPECT_LE(r.results["iterations_median"].get<double>(), 5.0);
-  EXPECT_LE(r.results["final_joint_error_deg_max"].get<double>(), 0.01);
 }
 
 }  // namespace

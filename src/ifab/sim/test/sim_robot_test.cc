@@ -10,7 +10,7 @@
 namespace ifab::sim {
 namespace {
 
-SimOptions Default() { return SimOptions::Load(DataPath("robots/insitu_fabricator.yaml")); }
+SimOptions Default() { return SimOptions::Load(DataPath("sim/insitu_fabricator.yaml")); }
 
 TEST(SimRobot, SameSeedGivesByteIdenticalScans) {
   const SimOptions o = Default();

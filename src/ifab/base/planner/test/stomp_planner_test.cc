@@ -6,7 +6,6 @@
 #include <cmath>
 
 #include "brick_stacking_scene.h"
-#include "ifab/base/planner/planning_experiment.h"
 #include "ifab/core/angles.h"
 #include "ifab/core/data_path.h"
 #include "ifab/core/error.h"
@@ -197,53 +196,6 @@ TEST(StompBasePlanner, ReportsImpossibleRequestsAsStatus) {
   const PlanResult r = walled.Plan(start, Pose2(3.6, 0.0, kPi / 2), rng);
   EXPECT_EQ(r.status, PlanStatus::kUnreachable) << r.BriefReport();
   EXPECT_LT(r.seconds, 1.0);  // decided by the grid, not by running STOMP out of iterations
-}
-
-// Stochastic planner, statistical test over fixed seeds: the experiment's random start/goal pairs
-// (building positions around the stack and free poses anywhere in the site).
-TEST(StompBasePlanner, SucceedsOnRandomStartGoalPairs) {
-  StompPlannerOptions o;
-  o.num_threads = 1;
-  const StompBasePlanner planner = MakePlanner(o);
-  BasePlanningExperimentOptions e;
-  e.cases = 150;
-  e.seed = 5;
-  std::vector<BasePlanningCase> cases;
-  const nlohmann::json j = RunBasePlanningExperiment(planner, e, &cases);
-  ASSERT_EQ(cases.size(), 150u);
-  EXPECT_EQ(j["cases"], 150);
-  EXPECT_GE(j["success_rate"].get<double>(), 0.97) << j.dump(2);
-  EXPECT_LT(j["max_lateral_velocity_mps"].get<double>(), 1e-3);
-  EXPECT_GE(j["min_clearance_m"].get<double>(), 0.0);
-  for (const char* key : {"plan_ms_median", "plan_ms_p95", "status_counts", "failures"}) EXPECT_TRUE(j.contains(key));
-  for (const auto& c : cases) {
-    if (!c.result.IsUsable()) continue;
-    EXPECT_LT(MaxLateralVelocity(planner, c.result.trajectory), 1e-3);
-    EXPECT_GE(MinClearance(planner.checker(), c.result.trajectory), -2e-3);
-  }
-}
-
-TEST(PlanningExperiment, SamplesCollisionFreePosesInTheSite) {
-  const StompBasePlanner planner = MakePlanner();
-  BasePlanningExperimentOptions e;
-  RandomStream rng(3);
-  int building = 0;
-  for (int i = 0; i < 300; ++i) {
-    const Pose2 p = SampleExperimentPose(planner.checker(), e, rng);
-    EXPECT_GE(planner.checker().Clearance(p), e.pose_min_clearance);
-    const double r = std::hypot(p.x, p.y);
-    if (r >= e.building_radius_min - 1e-9 && r <= e.building_radius_max + 1e-9 &&
-        AngleDistance(p, Pose2(p.x, p.y, std::atan2(-p.y, -p.x))) <= e.building_heading_noise + 1e-9) {
-      ++building;
-    }
-  }
-  EXPECT_GT(building, 100);  // about half are building positions facing the stack
-  const auto c = ConfigNode::FromString("cases: 7\nbuilding_region: [-1, 1, -1, 1]\n", "e.yaml");
-  const auto o = BasePlanningExperimentOptions::FromConfig(c);
-  EXPECT_EQ(o.cases, 7);
-  EXPECT_EQ(o.building_region, Eigen::Vector4d(-1, 1, -1, 1));
-  EXPECT_THROW(BasePlanningExperimentOptions::FromConfig(ConfigNode::FromString("building_region: [1, -1, 0, 1]\n")),
-               InputError);
 }
 
 }  // namespace

@@ -12,7 +12,7 @@
 #include "ifab/base/planner/stomp_planner.h"
 #include "ifab/core/config.h"
 
-namespace ifab::base {
+namespace ifab::experiments {
 
 struct BasePlanningExperimentOptions {
   int cases{500};                         ///< random start/goal pairs
@@ -36,17 +36,17 @@ struct BasePlanningExperimentOptions {
 /// One planned case.
 struct BasePlanningCase {
   Pose2 start, goal;
-  PlanResult result;
+  base::PlanResult result;
 };
 
 /// Draw a start or goal pose as the experiment does (exposed for tests and benchmarks).
-Pose2 SampleExperimentPose(const FootprintChecker& checker, const BasePlanningExperimentOptions& options,
+Pose2 SampleExperimentPose(const base::FootprintChecker& checker, const BasePlanningExperimentOptions& options,
                            RandomStream& rng);
 
 /// Plan every case (one after another, so plan times are single-plan wall times) and summarise.
 /// The planner's num_threads decides how its rollouts run.
-nlohmann::json RunBasePlanningExperiment(const StompBasePlanner& planner,
+nlohmann::json RunBasePlanningExperiment(const base::StompBasePlanner& planner,
                                          const BasePlanningExperimentOptions& options,
                                          std::vector<BasePlanningCase>* cases = nullptr);
 
-}  // namespace ifab::base
+}  // namespace ifab::experiments

@@ -1,4 +1,4 @@
-#include "ifab/base/planner/planning_experiment.h"
+#include "ifab/experiments/base_planning_experiment.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,8 +8,13 @@
 #include "ifab/core/angles.h"
 #include "ifab/core/error.h"
 
-namespace ifab::base {
+namespace ifab::experiments {
 namespace {
+
+using base::FootprintChecker;
+using base::PlanResult;
+using base::PlanStatus;
+using base::StompBasePlanner;
 
 double Percentile(std::vector<double> v, double p) {
   if (v.empty()) return 0.0;
@@ -145,4 +150,4 @@ nlohmann::json RunBasePlanningExperiment(const StompBasePlanner& planner, const 
   return j;
 }
 
-}  // namespace ifab::base
+}  // namespace ifab::experiments

@@ -1,4 +1,4 @@
-#include "ifab/arm/planning_experiment.h"
+#include "ifab/experiments/arm_planning_experiment.h"
 
 #include <fmt/format.h>
 
@@ -12,8 +12,19 @@
 #include "ifab/core/config.h"
 #include "ifab/core/random.h"
 
-namespace ifab::arm {
+namespace ifab::experiments {
 namespace {
+
+using arm::ArmModel;
+using arm::ArmPlan;
+using arm::IkOptions;
+using arm::IlqgOptions;
+using arm::PlanStatus;
+using arm::ArmPrimitives;
+using arm::IkResult;
+using arm::IkSolver;
+using arm::IlqgPlanner;
+using arm::PlanSummary;
 
 double Median(std::vector<double> v) {
   if (v.empty()) return 0.0;
@@ -266,4 +277,4 @@ ArmPlanningResult RunArmPlanningExperiment(const RobotModel& robot, const ArmPla
   return result;
 }
 
-}  // namespace ifab::arm
+}  // namespace ifab::experiments

@@ -1,6 +1,7 @@
 #pragma once
 /// \file
-/// The `arm-planning` experiment's logic (issue 6): seeded point-to-point motions typical of the
+/// The `arm-planning` experiment's runner (issue 6; moved out of arm/ by issue 12: algorithm
+/// modules write no files and do not link nlohmann_json): seeded point-to-point motions typical of the
 /// brick stack (transfers between the feeder and the stack, approach/retreat above a brick, scan
 /// sweeps of one joint and moves to scan poses, moves to and from the home configuration), each
 /// planned with iLQG on one thread. The experiment wrapper only loads the config and writes the
@@ -21,7 +22,7 @@ namespace ifab {
 class ConfigNode;
 }
 
-namespace ifab::arm {
+namespace ifab::experiments {
 
 struct ArmPlanningExperimentConfig {
   int cases{240};                      ///< number of motions
@@ -40,8 +41,8 @@ struct ArmPlanningExperimentConfig {
   std::optional<Pose3> T_base_feeder_brick;
   double brick_height{0.052};          ///< [m] (German DF brick)
   Vector6d q_home{(Vector6d() << 0.0, -0.5236, 0.5236, 0.0, 1.5708, 0.0).finished()};  ///< [rad]
-  IlqgOptions ilqg;                    ///< planner options
-  IkOptions ik;                        ///< IK options for generating the cases
+  arm::IlqgOptions ilqg;                    ///< planner options
+  arm::IkOptions ik;                        ///< IK options for generating the cases
 
   /// Read the experiment YAML (keys: cases, mix, workspace, sweep_deg, home_deg, brick_height,
   /// ilqg, ik; seed, robot, robot_yaml and arm are left to the wrapper) over `base` (whose ilqg
@@ -54,7 +55,7 @@ struct ArmPlanningCase {
   std::string kind;  ///< transfer, approach, sweep, scan_pose, home
   Vector6d q_from{Vector6d::Zero()};
   Vector6d q_to{Vector6d::Zero()};
-  PlanSummary summary;
+  arm::PlanSummary summary;
 };
 
 struct ArmPlanningResult {
@@ -70,4 +71,4 @@ struct ArmPlanningResult {
 ArmPlanningResult RunArmPlanningExperiment(const RobotModel& robot, const ArmPlanningExperimentConfig& config,
                                            std::uint64_t seed);
 
-}  // namespace ifab::arm
+}  // namespace ifab::experiments

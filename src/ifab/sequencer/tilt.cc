@@ -1,0 +1,37 @@
+#include "ifab/sequencer/tilt.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+
+namespace ifab::sequencer {
+
+std::optional<Eigen::Vector3d> MeanUp(const std::vector<AccelSample>& samples, Seconds t0, Seconds t1,
+                                      int min_samples) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  int n = 0;
+  for (const AccelSample& s : samples) {
+    if (s.stamp.t < t0 || s.stamp.t > t1) continue;
+    sum += s.specific_force;
+    ++n;
+  }
+  if (n < min_samples || sum.norm() < 1e-9) return std::nullopt;
+  return Eigen::Vector3d(sum.normalized());
+}
+
+Eigen::Matrix3d TiltChange(const Eigen::Vector3d& up_ref, const Eigen::Vector3d& up_now) {
+  // up_now = R^T up_ref (the same world up seen from the turned base), so R maps up_now to up_ref.
+  return Eigen::Quaterniond::FromTwoVectors(up_now.normalized(), up_ref.normalized()).toRotationMatrix();
+}
+
+Pose3 CompensateTilt(const Pose3& T_site_base_ref, const Eigen::Vector3d& up_ref, const Eigen::Vector3d& up_now) {
+  Pose3 delta = Pose3::Identity();
+  delta.linear() = TiltChange(up_ref, up_now);
+  return T_site_base_ref * delta;
+}
+
+double TiltAngle(const Eigen::Vector3d& up_a, const Eigen::Vector3d& up_b) {
+  return std::acos(std::clamp(up_a.normalized().dot(up_b.normalized()), -1.0, 1.0));
+}
+
+}  // namespace ifab::sequencer

@@ -1,0 +1,37 @@
+#pragma once
+/// \file
+/// The base's tilt from the IMU's accelerometers (paper Sec. VII's "the floor isn't perfectly
+/// flat"; cf. Kindle et al., RA-L 2025, who compensate deflection with accelerometers). At rest an
+/// accelerometer measures +g along the up direction, so the mean specific force over a window
+/// gives the base's roll and pitch in its own frame. The stack compares the attitude when it
+/// scanned the workpiece with the attitude when it is about to place a brick: the arm reaching
+/// out with a brick tilts the base on its tracks, and the registered pose no longer holds.
+/// A constant accelerometer bias or mounting error cancels in this change (to first order).
+
+#include <optional>
+#include <vector>
+
+#include "ifab/core/se3.h"
+#include "ifab/msgs/msgs.h"
+
+namespace ifab::sequencer {
+
+/// Mean up direction (unit vector, sensor = base frame) of the samples with host time in
+/// [t0, t1]; nullopt with fewer than `min_samples` samples there.
+std::optional<Eigen::Vector3d> MeanUp(const std::vector<AccelSample>& samples, Seconds t0, Seconds t1,
+                                      int min_samples = 20);
+
+/// The rotation R (in the base frame at the reference) that the base turned through between the
+/// reference and now, from the up directions then and now: R_site_base(now) = R_site_base(ref) R.
+/// The turn about the vertical is not observable and taken as zero (the smallest rotation).
+Eigen::Matrix3d TiltChange(const Eigen::Vector3d& up_ref, const Eigen::Vector3d& up_now);
+
+/// The base's pose now from its pose at the reference and the tilt change. The base turns about
+/// its origin (the footprint centre on the floor): tracks on an elastic floor turn about the
+/// centroid of their contact area.
+Pose3 CompensateTilt(const Pose3& T_site_base_ref, const Eigen::Vector3d& up_ref, const Eigen::Vector3d& up_now);
+
+/// Angle between two up directions [rad].
+double TiltAngle(const Eigen::Vector3d& up_a, const Eigen::Vector3d& up_b);
+
+}  // namespace ifab::sequencer
