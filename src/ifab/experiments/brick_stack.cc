@@ -85,12 +85,14 @@ struct Setup {
   sequencer::BuildingPlan plan;
   Vector6d q0;
   bool calibrate_mount{true};                ///< calibrate the arm laser first (else the design mount)
+  bool compensate_bias{true};                ///< identify the range bias with the mount if the plan says how
   sequencer::LaserCalibrationPlan calibration;  ///< how: sweeps of a cube on the floor (Sec. V-C)
 };
 
 Setup LoadSetup(const ConfigNode& c) {
   c.ExpectKeys({"seed", "robot", "site", "arm", "estimator", "planner", "controller", "base", "perception",
-                "plan", "mission", "start_joints_deg", "write_clouds", "mount", "laser_calibration", "range_bias"});
+                "plan", "mission", "start_joints_deg", "write_clouds", "mount", "laser_calibration", "range_bias",
+                "range_bias_compensation"});
   Setup s;
   // The simulated machine (truth) and what the stack knows of it (design values, configs).
   const ConfigNode robot_yaml = ConfigNode::LoadFile(Beside(c, "robot"));
@@ -118,6 +120,9 @@ Setup LoadSetup(const ConfigNode& c) {
   s.calibrate_mount = mount == "calibrate";
   if (s.calibrate_mount)
     s.calibration = sequencer::LaserCalibrationPlan::FromConfig(ConfigNode::LoadFile(Beside(c, "laser_calibration")));
+  // false: no range-bias identification, eq. 6 as written (the ablation "without bias compensation").
+  s.compensate_bias = c.Get<bool>("range_bias_compensation", true);
+  if (!s.compensate_bias) s.calibration.range_bias.reset();
   s.mission_options = sequencer::MissionOptions::FromConfig(c["mission"]);
   {
     const auto v = robot_yaml["feeder_in_base"].AsNumbers(6);
@@ -132,10 +137,47 @@ Setup LoadSetup(const ConfigNode& c) {
   return s;
 }
 
+// Scoring only: the identified range bias against the simulated unit's curve, over the ranges and
+// incidences where compensation uses it (its std below the guard) and beside it.
+nlohmann::json ScoreRangeBias(const RangeBiasSummary& bias, const RangeBiasCompensation& comp,
+                              const sim::LrfOptions& unit) {
+  Stats err, err_used, z;
+  int used = 0, within2 = 0;
+  nlohmann::json table = nlohmann::json::array();
+  for (double r = 0.3; r <= 3.0001; r += 0.1)
+    for (double deg = 0.0; deg <= 80.0; deg += 10.0) {
+      const double inc = DegToRad(deg);
+      const double b = bias.model.Bias(r, inc), truth = unit.Bias(r, inc), sd = bias.model.Std(r, inc);
+      const bool in_use = sd <= comp.max_std_fraction * comp.sigma_along;
+      err.Add(1e3 * std::abs(b - truth));
+      if (in_use) {
+        err_used.Add(1e3 * std::abs(b - truth));
+        ++used;
+        within2 += std::abs(b - truth) <= 2.0 * sd;
+        z.Add(std::abs(b - truth) / sd);
+      }
+      if (std::abs(r - std::round(r * 2.0) / 2.0) < 1e-6 && static_cast<int>(deg) % 20 == 0)
+        table.push_back({{"range_m", r}, {"incidence_deg", deg}, {"identified_mm", 1e3 * b}, {"true_mm", 1e3 * truth},
+                         {"std_mm", 1e3 * sd}, {"used", in_use}});
+    }
+  return {{"message", bias.message},
+          {"points_used", bias.num_used},
+          {"rms_whitened", bias.rms_whitened},
+          {"variance_factor", bias.variance_factor},
+          {"cells_in_use", used},
+          {"cells", err.n},
+          {"error_vs_true_mm_mean_in_use", err_used.Mean()},
+          {"error_vs_true_mm_max_in_use", err_used.max},
+          {"error_vs_true_mm_mean_all", err.Mean()},
+          {"within_2_std_fraction_in_use", used ? double(within2) / used : 0.0},
+          {"curve", table}};
+}
+
 // The arm laser's mount calibrated before the mission, as on the real machine (Sec. V-C): the same
 // simulated robot sweeps a cube standing where the stack will be, placed within a few mm of where
 // the plan says (registration finds it). Returns the mount and a summary for results.json.
-Pose3 CalibrateMount(const Setup& setup, std::uint64_t seed, const RunContext& ctx, nlohmann::json* info) {
+Pose3 CalibrateMount(const Setup& setup, std::uint64_t seed, const RunContext& ctx, nlohmann::json* info,
+                     RangeBiasCompensation* compensation) {
   const sequencer::LaserCalibrationPlan& plan = setup.calibration;
   RandomStream rng(seed + 7919);
   const Pose3 T_base_cube_true = plan.T_base_cube() * PoseFromXyzRpy(rng.Normal(0.005), rng.Normal(0.005), 0, 0, 0,
@@ -144,9 +186,12 @@ Pose3 CalibrateMount(const Setup& setup, std::uint64_t seed, const RunContext& c
   const auto b = XyzRpyFromPose(T_site_cube * T_base_cube_true.inverse());
   sim::SimRobot sim(setup.sim_options, Pose2(b[0], b[1], b[5]), plan.scan_posture, seed + 7919);
   sim.mutable_world().AddBrick({"cube", T_site_cube, Box{Eigen::Vector3d::Constant(plan.cube_size)}});
-  const CalibrationSummary cs = sequencer::CalibrateArmLaser(sim, setup.parts.robot, setup.parts.arm, plan,
-                                                             plan.scan_posture, [&](const std::string& t) { ctx.Progress(t); });
+  const sequencer::ArmLaserCalibration cal = sequencer::CalibrateArmLaserAndRangeBias(
+      sim, setup.parts.robot, setup.parts.arm, plan, plan.scan_posture, [&](const std::string& t) { ctx.Progress(t); });
+  const CalibrationSummary& cs = cal.mount;
   if (!cs.IsUsable()) throw std::runtime_error("arm laser calibration failed: " + cs.message);
+  if (cal.bias && !cal.bias->usable) throw std::runtime_error("arm laser range bias: " + cal.bias->message);
+  *compensation = cal.compensation;
   // Scoring only: how far the calibrated mount is from the simulator's true one.
   const Pose3 e = sim.true_T_tool0_arm_laser().inverse() * cs.T_tool0_laser;
   const auto v = XyzRpyFromPose(e);
@@ -155,6 +200,12 @@ Pose3 CalibrateMount(const Setup& setup, std::uint64_t seed, const RunContext& c
            {"error_vs_true_mm", {1e3 * v[0], 1e3 * v[1], 1e3 * v[2]}},
            {"error_vs_true_deg", {RadToDeg(v[3]), RadToDeg(v[4]), RadToDeg(v[5])}},
            {"sim_seconds", sim.Now()}};
+  if (cal.bias) {
+    (*info)["range_bias"] = ScoreRangeBias(*cal.bias, cal.compensation, setup.sim_options.arm_laser);
+    const auto u = XyzRpyFromPose(sim.true_T_tool0_arm_laser().inverse() * cal.mount_uncompensated.T_tool0_laser);
+    (*info)["uncompensated_error_vs_true_mm"] = {1e3 * u[0], 1e3 * u[1], 1e3 * u[2]};
+    (*info)["uncompensated_error_vs_true_deg"] = {RadToDeg(u[3]), RadToDeg(u[4]), RadToDeg(u[5])};
+  }
   return cs.T_tool0_laser;
 }
 
@@ -163,7 +214,9 @@ nlohmann::json Run(const RunContext& ctx) {
   const ConfigNode& c = *ctx.config;
   Setup setup = LoadSetup(c);
   nlohmann::json mount_info = {{"source", "design"}};
-  if (setup.calibrate_mount) setup.parts.T_tool0_arm_laser = CalibrateMount(setup, ctx.seed, ctx, &mount_info);
+  if (setup.calibrate_mount)
+    setup.parts.T_tool0_arm_laser =
+        CalibrateMount(setup, ctx.seed, ctx, &mount_info, &setup.parts.assembly.range_bias);
   const sim::SimOptions& sim_options = setup.sim_options;
   const sequencer::MissionComponents& parts = setup.parts;
   const sequencer::MissionOptions& mission_options = setup.mission_options;

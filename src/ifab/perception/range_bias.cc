@@ -398,51 +398,63 @@ RangeBiasCompensation RangeBiasCompensation::FromConfig(const ConfigNode& c) {
 
 std::vector<Eigen::Vector3d> EstimateNormals(const std::vector<RayPoint>& cloud, double radius, int min_neighbours,
                                              double along_sigma) {
-  // A hash grid of cells of the radius: the neighbours of a point lie in its 27 cells.
+  // Sufficient statistics per cell of a hash grid (cells of 2/3 the radius, so a cell and its 26
+  // neighbours span about +-radius): a point's normal is the PCA of its cell's block. O(N), and the
+  // same for every point of a cell, which is what a sweep's dense clouds need.
+  const double cell = 2.0 * radius / 3.0;
   auto key = [&](const Eigen::Vector3d& p, int dx, int dy, int dz) {
-    const auto c = [&](double v, int d) { return static_cast<std::int64_t>(std::floor(v / radius)) + d; };
+    const auto c = [&](double v, int d) { return static_cast<std::int64_t>(std::floor(v / cell)) + d; };
     return CellKey{c(p.x(), dx), c(p.y(), dy), c(p.z(), dz)};
   };
-  std::unordered_map<CellKey, std::vector<int>, CellHash> grid;
-  grid.reserve(cloud.size() / 4 + 1);
-  for (std::size_t i = 0; i < cloud.size(); ++i) grid[key(cloud[i].p, 0, 0, 0)].push_back(static_cast<int>(i));
+  struct Moments {
+    int n{0};
+    Eigen::Vector3d sum{Eigen::Vector3d::Zero()};
+    Eigen::Matrix3d second{Eigen::Matrix3d::Zero()}, rays{Eigen::Matrix3d::Zero()};
+    Eigen::Vector3d normal{Eigen::Vector3d::Zero()};
+    bool done{false};
+  };
+  std::unordered_map<CellKey, Moments, CellHash> grid;
+  grid.reserve(cloud.size() / 8 + 1);
+  for (const RayPoint& q : cloud) {
+    Moments& m = grid[key(q.p, 0, 0, 0)];
+    ++m.n;
+    m.sum += q.p;
+    m.second += q.p * q.p.transpose();
+    const Eigen::Vector3d ray = q.Ray();
+    m.rays += ray * ray.transpose();
+  }
   std::vector<Eigen::Vector3d> normals(cloud.size(), Eigen::Vector3d::Zero());
-  const double r2 = radius * radius;
-  constexpr int kMaxNeighbours = 400;  // enough for a normal; caps the cost in dense clouds
-  std::vector<int> nb;
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     const Eigen::Vector3d& p = cloud[i].p;
-    nb.clear();
-    for (int dx = -1; dx <= 1; ++dx)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dz = -1; dz <= 1; ++dz) {
-          const auto it = grid.find(key(p, dx, dy, dz));
-          if (it == grid.end()) continue;
-          for (int j : it->second)
-            if ((cloud[static_cast<std::size_t>(j)].p - p).squaredNorm() <= r2) nb.push_back(j);
-        }
-    if (static_cast<int>(nb.size()) < min_neighbours) continue;
-    const std::size_t stride = std::max<std::size_t>(1, nb.size() / kMaxNeighbours);
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    Eigen::Matrix3d second = Eigen::Matrix3d::Zero(), noise = Eigen::Matrix3d::Zero();
-    int n = 0;
-    for (std::size_t k = 0; k < nb.size(); k += stride) {
-      const RayPoint& q = cloud[static_cast<std::size_t>(nb[k])];
-      mean += q.p;
-      second += q.p * q.p.transpose();
-      const Eigen::Vector3d ray = q.Ray();
-      noise += ray * ray.transpose();
-      ++n;
+    Moments& home = grid[key(p, 0, 0, 0)];
+    if (!home.done) {
+      home.done = true;
+      Moments block;
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dz = -1; dz <= 1; ++dz) {
+            const auto it = grid.find(key(p, dx, dy, dz));
+            if (it == grid.end()) continue;
+            block.n += it->second.n;
+            block.sum += it->second.sum;
+            block.second += it->second.second;
+            block.rays += it->second.rays;
+          }
+      if (block.n >= min_neighbours) {
+        const Eigen::Vector3d mean = block.sum / block.n;
+        // The along-ray noise spreads the block along the rays and tilts a plain PCA normal
+        // towards them: take its expected covariance out.
+        const Eigen::Matrix3d cov = block.second / block.n - mean * mean.transpose() -
+                                    along_sigma * along_sigma * block.rays / block.n;
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+        eig.computeDirect(cov);
+        home.normal = eig.eigenvectors().col(0).normalized();
+      }
     }
-    mean /= n;
-    // The along-ray noise spreads the neighbourhood along the rays and tilts a plain PCA normal
-    // towards the ray: take its expected covariance out.
-    Eigen::Matrix3d cov = second / n - mean * mean.transpose() - along_sigma * along_sigma * noise / n;
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
-    eig.computeDirect(cov);
-    Eigen::Vector3d normal = eig.eigenvectors().col(0);
+    Eigen::Vector3d normal = home.normal;
+    if (normal.isZero()) continue;
     if (normal.dot(cloud[i].origin - p) < 0) normal = -normal;
-    normals[i] = normal.normalized();
+    normals[i] = normal;
   }
   return normals;
 }

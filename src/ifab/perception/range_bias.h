@@ -101,7 +101,8 @@ RangeBiasSummary IdentifyRangeBias(const std::vector<CalibrationSweep>& sweeps,
 struct RangeBiasCompensation {
   RangeBiasModel model;           ///< identified; empty: no compensation
   bool compensate{true};          ///< false: eq. 6 as written even if a model is given
-  double normal_radius{0.1};      ///< [m] neighbourhood of a point for its surface normal (incidence)
+  double normal_radius{0.1};      ///< [m] half-size of the neighbourhood that gives a point its surface
+                                  ///< normal (incidence); below a cube face, above the range noise
   int min_neighbours{12};         ///< fewer: the incidence is unknown and the point is dropped
   /// Keep a return only where the compensated bias's std is below this fraction of sigma_along:
   /// there the bias left after compensation is small against the noise every point has anyway.
@@ -127,8 +128,9 @@ struct RangeBiasCompensationStats {
 RangeBiasCompensationStats CompensateRangeBias(std::vector<SweepPoint>& points, const Pose3& T_tool0_laser,
                                                const RangeBiasCompensation& compensation);
 
-/// Surface normals (base frame, unit, facing the ray origins) of the points by local PCA; zero
-/// where fewer than min_neighbours lie within radius. along_sigma: the range noise taken out.
+/// Surface normals (base frame, unit, facing the ray origins) of the points by PCA of the points
+/// within about +-radius (a hash grid's 3x3x3 block of cells); zero where fewer than
+/// min_neighbours are there. along_sigma: the range noise taken out of the covariance.
 std::vector<Eigen::Vector3d> EstimateNormals(const std::vector<RayPoint>& cloud, double radius, int min_neighbours,
                                              double along_sigma);
 
