@@ -57,14 +57,16 @@ struct RangeBiasOptions {
   double smoothness_sigma{0.01};   ///< [m] prior std of the difference between neighbouring knots
   double max_residual{0.1};        ///< [m] returns whose range is off by more are not the target
   double edge_distance{0.015};     ///< [m] rays passing this close to a model edge are left out (mixed pixels)
-  double max_incidence{1.48};      ///< [rad] rays more oblique to the face hit are left out (85 deg)
+  double max_incidence{1.31};      ///< [rad] rays more oblique to the face hit are left out (75 deg: the
+                                   ///< footprint and mixed returns of grazing beams are not a range bias;
+                                   ///< the model keeps its prior there, so compensation leaves them out)
   double loss_scale{3.0};          ///< [sigmas] Cauchy re-weighting (objects not in the model)
   int max_iterations{10};          ///< Gauss-Newton steps
   double step_tolerance{1e-4};     ///< [m, rad] converged when no coefficient or pose moves more
                                    ///< (0.1 mm: small against the 18 mm noise)
   double pose_prior_sigma_translation{1.0};  ///< [m] on the mount's and bodies' change (gauge of the ground)
   double pose_prior_sigma_rotation{1.0};     ///< [rad]
-  int point_stride{1};             ///< use every n-th point (speed)
+  int point_stride{2};             ///< use every n-th point (speed: a calibration has about 1e6)
 
   /// Reads {range_knots, incidence_knots_deg, sigma_along, prior_sigma, smoothness_sigma,
   /// max_residual, edge_distance, max_incidence_deg, loss_scale, max_iterations, step_tolerance,
