@@ -14,6 +14,7 @@ void AddPlanArmCommand(CLI::App& app, int& exit_code);
 void AddPlanBaseCommand(CLI::App& app, int& exit_code);
 void AddRegisterCommand(CLI::App& app, int& exit_code);  // perception
 void AddCalibrateCommand(CLI::App& app, int& exit_code);  // perception
+void AddCalibrateBiasCommand(CLI::App& app, int& exit_code);  // perception + sequencer: range bias
 void AddEstimateCommand(CLI::App& app, int& exit_code);  // base estimator
 
 }  // namespace ifab::app

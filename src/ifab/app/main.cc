@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
   ifab::app::AddPlanBaseCommand(app, exit_code);
   ifab::app::AddRegisterCommand(app, exit_code);
   ifab::app::AddCalibrateCommand(app, exit_code);
+  ifab::app::AddCalibrateBiasCommand(app, exit_code);
   ifab::app::AddEstimateCommand(app, exit_code);
 
   try {

@@ -94,6 +94,7 @@ struct Setup {
   sequencer::BuildingPlan plan;
   Vector6d q0;
   bool calibrate_mount{true};                ///< calibrate the arm laser first (else the design mount)
+  bool compensate_bias{true};                ///< identify the range bias with the mount if the plan says how
   sequencer::LaserCalibrationPlan calibration;  ///< how: sweeps of a cube on the floor (Sec. V-C)
   Pose3 T_base_feeder_design{Pose3::Identity()};  ///< the feeder as designed (robot YAML)
   bool as_built_world{true};                 ///< `world: as-built` (default) or `exact` (model = world)
@@ -155,7 +156,7 @@ void DrawWorld(Setup& s, std::uint64_t seed) {
 Setup LoadSetup(const ConfigNode& c) {
   c.ExpectKeys({"seed", "robot", "urdf", "site", "sim", "world", "as_built", "arm", "estimator", "planner",
                 "controller", "base", "perception", "plan", "mission", "start_joints_deg", "write_clouds", "mount",
-                "laser_calibration", "range_bias"});
+                "laser_calibration", "range_bias", "range_bias_compensation"});
   Setup s;
   LoadStackSide(c, s);
   LoadSimSide(c, s);
@@ -164,6 +165,9 @@ Setup LoadSetup(const ConfigNode& c) {
   s.calibrate_mount = mount == "calibrate";
   if (s.calibrate_mount)
     s.calibration = sequencer::LaserCalibrationPlan::FromConfig(ConfigNode::LoadFile(Beside(c, "laser_calibration")));
+  // false: no range-bias identification, eq. 6 as written (the ablation "without bias compensation").
+  s.compensate_bias = c.Get<bool>("range_bias_compensation", true);
+  if (!s.compensate_bias) s.calibration.range_bias.reset();
   s.mission_options = sequencer::MissionOptions::FromConfig(c["mission"]);
   s.mission_options.T_base_feeder = s.T_base_feeder_design;
   s.plan = sequencer::BuildingPlan::FromConfig(c["plan"]);
@@ -173,6 +177,42 @@ Setup LoadSetup(const ConfigNode& c) {
     for (int i = 0; i < 6; ++i) s.q0[i] = DegToRad(v[static_cast<std::size_t>(i)]);
   }
   return s;
+}
+
+// Scoring only: the identified range bias against the simulated unit's curve, over the ranges and
+// incidences where compensation uses it (its std below the guard) and beside it.
+nlohmann::json ScoreRangeBias(const RangeBiasSummary& bias, const RangeBiasCompensation& comp,
+                              const sim::LrfOptions& unit) {
+  Stats err, err_used, z;
+  int used = 0, within2 = 0;
+  nlohmann::json table = nlohmann::json::array();
+  for (double r = 0.3; r <= 3.0001; r += 0.1)
+    for (double deg = 0.0; deg <= 80.0; deg += 10.0) {
+      const double inc = DegToRad(deg);
+      const double b = bias.model.Bias(r, inc), truth = unit.Bias(r, inc), sd = bias.model.Std(r, inc);
+      const bool in_use = sd <= comp.max_std_fraction * comp.sigma_along;
+      err.Add(1e3 * std::abs(b - truth));
+      if (in_use) {
+        err_used.Add(1e3 * std::abs(b - truth));
+        ++used;
+        within2 += std::abs(b - truth) <= 2.0 * sd;
+        z.Add(std::abs(b - truth) / sd);
+      }
+      if (std::abs(r - std::round(r * 2.0) / 2.0) < 1e-6 && static_cast<int>(deg) % 20 == 0)
+        table.push_back({{"range_m", r}, {"incidence_deg", deg}, {"identified_mm", 1e3 * b}, {"true_mm", 1e3 * truth},
+                         {"std_mm", 1e3 * sd}, {"used", in_use}});
+    }
+  return {{"message", bias.message},
+          {"points_used", bias.num_used},
+          {"rms_whitened", bias.rms_whitened},
+          {"variance_factor", bias.variance_factor},
+          {"cells_in_use", used},
+          {"cells", err.n},
+          {"error_vs_true_mm_mean_in_use", err_used.Mean()},
+          {"error_vs_true_mm_max_in_use", err_used.max},
+          {"error_vs_true_mm_mean_all", err.Mean()},
+          {"within_2_std_fraction_in_use", used ? double(within2) / used : 0.0},
+          {"curve", table}};
 }
 
 // The arm laser's mount calibrated before the mission, as on the real machine (Sec. V-C): the same
@@ -224,7 +264,8 @@ nlohmann::json AsBuiltSummary(const Setup& setup) {
           {"arm_laser_mount_error", mount(a.arm_laser_mount_error)}};
 }
 
-Pose3 CalibrateMount(const Setup& setup, std::uint64_t seed, const RunContext& ctx, nlohmann::json* info) {
+Pose3 CalibrateMount(const Setup& setup, std::uint64_t seed, const RunContext& ctx, nlohmann::json* info,
+                     RangeBiasCompensation* compensation) {
   const sequencer::LaserCalibrationPlan& plan = setup.calibration;
   RandomStream rng(seed + 7919);
   const Pose3 T_base_cube_true = plan.T_base_cube() * PoseFromXyzRpy(rng.Normal(0.005), rng.Normal(0.005), 0, 0, 0,
@@ -237,9 +278,12 @@ Pose3 CalibrateMount(const Setup& setup, std::uint64_t seed, const RunContext& c
   Pose3 T_site_cube_true = T_site_cube;
   T_site_cube_true.translation().z() = sim.world().FloorHeight(0.0, 0.0) + 0.5 * plan.cube_size;
   sim.mutable_world().AddBrick({"cube", T_site_cube_true, Box{Eigen::Vector3d::Constant(plan.cube_size)}});
-  const CalibrationSummary cs = sequencer::CalibrateArmLaser(sim, setup.parts.robot, setup.parts.arm, plan,
-                                                             plan.scan_posture, [&](const std::string& t) { ctx.Progress(t); });
+  const sequencer::ArmLaserCalibration cal = sequencer::CalibrateArmLaserAndRangeBias(
+      sim, setup.parts.robot, setup.parts.arm, plan, plan.scan_posture, [&](const std::string& t) { ctx.Progress(t); });
+  const CalibrationSummary& cs = cal.mount;
   if (!cs.IsUsable()) throw std::runtime_error("arm laser calibration failed: " + cs.message);
+  if (cal.bias && !cal.bias->usable) throw std::runtime_error("arm laser range bias: " + cal.bias->message);
+  *compensation = cal.compensation;
   // Scoring only: how far the calibrated mount is from the simulator's true one.
   const Pose3 e = sim.true_T_tool0_arm_laser().inverse() * cs.T_tool0_laser;
   const auto v = XyzRpyFromPose(e);
@@ -248,6 +292,14 @@ Pose3 CalibrateMount(const Setup& setup, std::uint64_t seed, const RunContext& c
            {"error_vs_true_mm", {1e3 * v[0], 1e3 * v[1], 1e3 * v[2]}},
            {"error_vs_true_deg", {RadToDeg(v[3]), RadToDeg(v[4]), RadToDeg(v[5])}},
            {"sim_seconds", sim.Now()}};
+  if (cal.bias) {
+    (*info)["range_bias"] = ScoreRangeBias(*cal.bias, cal.compensation,
+                                           setup.sim_options.as_built.exact ? setup.sim_options.arm_laser
+                                                                            : setup.sim_options.as_built.arm_laser);
+    const auto u = XyzRpyFromPose(sim.true_T_tool0_arm_laser().inverse() * cal.mount_uncompensated.T_tool0_laser);
+    (*info)["uncompensated_error_vs_true_mm"] = {1e3 * u[0], 1e3 * u[1], 1e3 * u[2]};
+    (*info)["uncompensated_error_vs_true_deg"] = {RadToDeg(u[3]), RadToDeg(u[4]), RadToDeg(u[5])};
+  }
   return cs.T_tool0_laser;
 }
 
@@ -258,7 +310,7 @@ nlohmann::json Run(const RunContext& ctx) {
   DrawWorld(setup, ctx.seed);
   nlohmann::json mount_info = {{"source", "design"}};
   if (setup.calibrate_mount) {
-    setup.parts.T_tool0_arm_laser = CalibrateMount(setup, ctx.seed, ctx, &mount_info);
+    setup.parts.T_tool0_arm_laser = CalibrateMount(setup, ctx.seed, ctx, &mount_info, &setup.parts.assembly.range_bias);
     // The same lasers, warmer by the calibration's time.
     setup.sim_options.seconds_since_power_on = mount_info["sim_seconds"].get<double>();
   }

@@ -8,7 +8,7 @@
 namespace ifab {
 
 ScanAssemblyOptions ScanAssemblyOptions::FromConfig(const ConfigNode& c) {
-  c.ExpectKeys({"interpolation", "max_sample_gap", "beam_stride", "min_range", "max_range"});
+  c.ExpectKeys({"interpolation", "max_sample_gap", "beam_stride", "min_range", "max_range", "range_bias"});
   ScanAssemblyOptions o;
   if (auto i = c.Find("interpolation")) {
     const auto v = i->As<std::string>();
@@ -20,6 +20,7 @@ ScanAssemblyOptions ScanAssemblyOptions::FromConfig(const ConfigNode& c) {
   c.ReadPositive("beam_stride", o.beam_stride);
   c.ReadNonNegative("min_range", o.min_range);
   c.ReadNonNegative("max_range", o.max_range);
+  if (auto b = c.Find("range_bias")) o.range_bias = RangeBiasCompensation::FromConfig(*b);
   return o;
 }
 
@@ -68,8 +69,13 @@ AssembledSweep AssembleSweep(const std::vector<LaserScan>& scans, const std::vec
 
 std::vector<RayPoint> AssembleCloud(const std::vector<LaserScan>& scans, const std::vector<JointState>& joints,
                                     const RobotModel& robot, const Pose3& T_tool0_laser,
-                                    const ScanAssemblyOptions& options) {
-  return ToBaseFrame(AssembleSweep(scans, joints, robot, options).points, T_tool0_laser);
+                                    const ScanAssemblyOptions& options, RangeBiasCompensationStats* bias_stats) {
+  std::vector<SweepPoint> points = AssembleSweep(scans, joints, robot, options).points;
+  if (options.range_bias.active()) {
+    const RangeBiasCompensationStats stats = CompensateRangeBias(points, T_tool0_laser, options.range_bias);
+    if (bias_stats) *bias_stats = stats;
+  }
+  return ToBaseFrame(points, T_tool0_laser);
 }
 
 }  // namespace ifab

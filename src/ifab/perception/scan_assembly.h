@@ -9,12 +9,17 @@
 /// forward kinematics (what the arm does between samples); `kPose` interpolates the flange poses
 /// of the two samples instead (translation linear, rotation slerp), as the paper's wording has it
 /// for poses received from the arm controller.
+///
+/// Range bias (range_bias.h): with an identified model, AssembleCloud first corrects every range
+/// by the bias at its range and incidence and drops returns where the model is too uncertain;
+/// without one (or `range_bias.compensate: false`) it is eq. 6 as the paper writes it.
 
 #include <vector>
 
 #include "ifab/model/robot_model.h"
 #include "ifab/msgs/msgs.h"
 #include "ifab/perception/cloud.h"
+#include "ifab/perception/range_bias.h"
 
 namespace ifab {
 
@@ -28,8 +33,10 @@ struct ScanAssemblyOptions {
   int beam_stride{1};          ///< keep every n-th beam (decimation)
   double min_range{0.0};       ///< [m] drop shorter ranges (besides the scan's own range_min)
   double max_range{0.0};       ///< [m] drop longer ranges (0: the scan's range_max only)
+  RangeBiasCompensation range_bias;  ///< the arm laser's range bias (empty model: eq. 6 as written)
 
-  /// Reads {interpolation: joint|pose, max_sample_gap, beam_stride, min_range, max_range}.
+  /// Reads {interpolation: joint|pose, max_sample_gap, beam_stride, min_range, max_range,
+  /// range_bias: {...}} (range_bias.h).
   static ScanAssemblyOptions FromConfig(const ConfigNode& config);
 };
 
@@ -44,9 +51,11 @@ struct AssembledSweep {
 AssembledSweep AssembleSweep(const std::vector<LaserScan>& scans, const std::vector<JointState>& joints,
                              const RobotModel& robot, const ScanAssemblyOptions& options = {});
 
-/// Eq. 6: the sweep's cloud in the base frame, each point with its ray origin.
+/// Eq. 6: the sweep's cloud in the base frame, each point with its ray origin; the range bias
+/// compensated first when options.range_bias is active (its counts into *bias_stats if given).
 std::vector<RayPoint> AssembleCloud(const std::vector<LaserScan>& scans, const std::vector<JointState>& joints,
                                     const RobotModel& robot, const Pose3& T_tool0_laser,
-                                    const ScanAssemblyOptions& options = {});
+                                    const ScanAssemblyOptions& options = {},
+                                    RangeBiasCompensationStats* bias_stats = nullptr);
 
 }  // namespace ifab

@@ -198,7 +198,7 @@ void SweepRecorder::Drain(SweepRecording* rec) {
 LaserCalibrationPlan LaserCalibrationPlan::FromConfig(const ConfigNode& config) {
   config.ExpectMap();
   config.ExpectKeys({"cube_in_base", "cube_size", "sweeps", "scan_posture_deg", "beam_stride", "min_range",
-                     "crop_radius", "calibration"});
+                     "crop_radius", "calibration", "range_bias"});
   LaserCalibrationPlan plan;
   const auto cb = config["cube_in_base"].AsNumbers(3);
   plan.cube_in_base = Eigen::Vector3d(cb[0], cb[1], DegToRad(cb[2]));
@@ -214,7 +214,43 @@ LaserCalibrationPlan LaserCalibrationPlan::FromConfig(const ConfigNode& config) 
   config.ReadNonNegative("min_range", plan.min_range);
   config.ReadNonNegative("crop_radius", plan.crop_radius);
   if (auto o = config.Find("calibration")) plan.calibration = CalibrationOptions::FromConfig(*o);
+  if (auto b = config.Find("range_bias")) plan.range_bias = RangeBiasPlan::FromConfig(*b);
   return plan;
+}
+
+RangeBiasPlan RangeBiasPlan::FromConfig(const ConfigNode& c) {
+  c.ExpectMap();
+  c.ExpectKeys({"floor_heights", "floor_aim", "floor_elevation_deg", "floor_joint", "floor_range_deg",
+                "floor_speed_deg_s", "floor_crop_radius", "identification", "compensation"});
+  RangeBiasPlan p;
+  if (auto h = c.Find("floor_heights")) {
+    p.floor_heights = h->AsNumbers();
+    for (std::size_t i = 0; i < p.floor_heights.size(); ++i)
+      if (!(p.floor_heights[i] > 0.1)) (*h)[i].Fail("a height above 0.1 m (the laser's minimum range)");
+  }
+  if (auto a = c.Find("floor_aim")) {
+    const auto v = a->AsNumbers(2);
+    p.floor_aim = Eigen::Vector2d(v[0], v[1]);
+  }
+  double elevation = RadToDeg(p.floor_elevation);
+  c.ReadInRange("floor_elevation_deg", elevation, 30.0, 89.0);
+  p.floor_elevation = DegToRad(elevation);
+  int joint = p.floor_joint + 1;
+  c.Read("floor_joint", joint);
+  if (joint < 1 || joint > 6) c["floor_joint"].Fail("a joint number 1..6");
+  p.floor_joint = joint - 1;
+  if (auto r = c.Find("floor_range_deg")) {
+    const double half = r->As<double>();
+    if (!(half > 0.0 && half <= 30.0)) r->Fail("a half range in (0, 30] deg");
+    p.floor_half_range = DegToRad(half);
+  }
+  double speed = RadToDeg(p.floor_speed);
+  c.ReadPositive("floor_speed_deg_s", speed);
+  p.floor_speed = DegToRad(speed);
+  c.ReadPositive("floor_crop_radius", p.floor_crop_radius);
+  if (auto o = c.Find("identification")) p.identification = RangeBiasOptions::FromConfig(*o);
+  if (auto o = c.Find("compensation")) p.compensation = RangeBiasCompensation::FromConfig(*o);
+  return p;
 }
 
 Pose3 LaserCalibrationPlan::T_base_cube() const {
@@ -252,22 +288,113 @@ CalibrationSummary CalibrateArmLaser(hal::Robot& robot, const RobotModel& model,
                                      const LaserCalibrationPlan& plan, const Vector6d& q_start,
                                      const std::function<void(const std::string&)>& progress,
                                      const SweepRecorderOptions& recorder_options) {
+  return CalibrateArmLaserAndRangeBias(robot, model, arm_options, plan, q_start, progress, recorder_options).mount;
+}
+
+}  // namespace ifab::sequencer
+
+namespace ifab::sequencer {
+
+ArmLaserCalibration IdentifyMountAndRangeBias(const std::vector<CalibrationSweep>& cube_sweeps,
+                                              const std::vector<CalibrationSweep>& floor_sweeps,
+                                              const std::vector<RegistrationBody>& bodies,
+                                              const Pose3& T_tool0_laser_guess, const CalibrationOptions& calibration,
+                                              const RangeBiasPlan& bias_plan,
+                                              const std::function<void(const std::string&)>& progress) {
+  ArmLaserCalibration out;
+  out.compensation = bias_plan.compensation;
+  out.compensation.model = {};
+  if (progress) progress("calibrating the arm laser mount (raw sweeps)");
+  out.mount_uncompensated = CalibrateLaserMount(cube_sweeps, bodies, T_tool0_laser_guess, calibration);
+  out.mount = out.mount_uncompensated;
+  if (!out.mount.IsUsable()) return out;
+  // The bias with the mount and the targets, from where the first solve left them.
+  std::vector<RegistrationBody> solved = bodies;
+  for (std::size_t b = 0; b < solved.size() && b < out.mount.bodies.size(); ++b)
+    solved[b].T_base_body = out.mount.bodies[b].T_base_body;
+  std::vector<CalibrationSweep> all = cube_sweeps;
+  all.insert(all.end(), floor_sweeps.begin(), floor_sweeps.end());
+  if (progress) progress("identifying the arm laser's range bias");
+  out.bias = IdentifyRangeBias(all, solved, out.mount.T_tool0_laser, bias_plan.identification);
+  if (!out.bias->usable) return out;
+  out.compensation.model = out.bias->model;
+  // The mount again, from the cube sweeps with their ranges compensated and the returns the
+  // model is unsure of left out (this replaces a fixed minimum range and incidence).
+  std::vector<CalibrationSweep> compensated = cube_sweeps;
+  for (auto& sw : compensated) CompensateRangeBias(sw.points, out.bias->T_tool0_laser, out.compensation);
+  for (std::size_t b = 0; b < solved.size() && b < out.bias->T_base_body.size(); ++b)
+    solved[b].T_base_body = out.bias->T_base_body[b];
+  if (progress) progress("calibrating the arm laser mount (compensated sweeps)");
+  out.mount = CalibrateLaserMount(compensated, solved, out.bias->T_tool0_laser, calibration);
+  return out;
+}
+
+ArmLaserCalibration CalibrateArmLaserAndRangeBias(hal::Robot& robot, const RobotModel& model,
+                                                  const arm::ArmOptions& arm_options, const LaserCalibrationPlan& plan,
+                                                  const Vector6d& q_start,
+                                                  const std::function<void(const std::string&)>& progress,
+                                                  const SweepRecorderOptions& recorder_options,
+                                                  std::vector<SweepRecording>* raw) {
   arm::ArmPrimitives arm(model, arm_options);
   SweepRecorder recorder(robot, arm, q_start, recorder_options);
-  std::vector<CalibrationSweep> sweeps;
+  std::vector<CalibrationSweep> cube_sweeps, floor_sweeps;
+  const auto bodies = CubeOnGroundBodies(plan.cube_size, plan.T_base_cube());
   try {
-    sweeps = RecordCubeSweeps(recorder, model, plan, progress);
+    cube_sweeps = RecordCubeSweeps(recorder, model, plan, progress, raw);
+    if (plan.range_bias) {
+      const RangeBiasPlan& bp = *plan.range_bias;
+      ScanAssemblyOptions assembly;
+      assembly.beam_stride = plan.beam_stride;
+      for (std::size_t k = 0; k < bp.floor_heights.size(); ++k) {
+        const double h = bp.floor_heights[k];
+        const std::string name = fmt::format("range-bias sweep {} of {}: the floor from {:.2f} m", k + 1,
+                                             bp.floor_heights.size(), h);
+        if (progress) progress(name);
+        SweepSpec spec;
+        spec.joint = bp.floor_joint;
+        spec.from = -bp.floor_half_range;
+        spec.to = bp.floor_half_range;
+        spec.speed = bp.floor_speed;
+        spec.aim_offset = bp.floor_aim;
+        LaserView view;
+        view.distance = h / std::sin(bp.floor_elevation);
+        view.elevation = bp.floor_elevation;
+        spec.view = view;
+        SweepRecording rec = recorder.Record(plan.cube_in_base.head<2>(), plan.scan_posture, spec, k % 2 == 1, name);
+        std::vector<SweepPoint> points = AssembleSweep(rec.scans, rec.joint_states, model, assembly).points;
+        if (!points.empty()) {
+          // Keep the patch below the laser (design mount): the floor is flat only locally.
+          const SweepPoint& mid = points[points.size() / 2];
+          const Eigen::Vector2d below = (mid.T_base_tool0 * model.T_tool0_arm_laser).translation().head<2>();
+          std::erase_if(points, [&](const SweepPoint& p) {
+            const Eigen::Vector3d p_base = p.T_base_tool0 * (model.T_tool0_arm_laser * p.p_laser);
+            return (p_base.head<2>() - below).norm() > bp.floor_crop_radius;
+          });
+        }
+        floor_sweeps.push_back({name, std::move(points)});
+        if (raw) raw->push_back(std::move(rec));
+      }
+    }
     recorder.MoveTo(q_start, "back to the start after calibration sweeps");
   } catch (const std::runtime_error& e) {
-    CalibrationSummary failed;
-    failed.status = RegistrationStatus::kNoPoints;
-    failed.message = e.what();
-    failed.T_tool0_laser = model.T_tool0_arm_laser;
+    ArmLaserCalibration failed;
+    failed.mount.status = RegistrationStatus::kNoPoints;
+    failed.mount.message = e.what();
+    failed.mount.T_tool0_laser = model.T_tool0_arm_laser;
+    failed.mount_uncompensated = failed.mount;
     return failed;
   }
-  if (progress) progress("calibrating the arm laser mount");
-  return CalibrateLaserMount(sweeps, CubeOnGroundBodies(plan.cube_size, plan.T_base_cube()), model.T_tool0_arm_laser,
-                             plan.calibration);
+  if (!plan.range_bias) {
+    ArmLaserCalibration out;
+    if (progress) progress("calibrating the arm laser mount");
+    out.mount = CalibrateLaserMount(cube_sweeps, bodies, model.T_tool0_arm_laser, plan.calibration);
+    out.mount_uncompensated = out.mount;
+    return out;
+  }
+  ArmLaserCalibration out = IdentifyMountAndRangeBias(cube_sweeps, floor_sweeps, bodies, model.T_tool0_arm_laser,
+                                                      plan.calibration, *plan.range_bias, progress);
+  out.floor_sweeps = std::move(floor_sweeps);
+  return out;
 }
 
 }  // namespace ifab::sequencer

@@ -15,6 +15,7 @@
 #include "ifab/hal/robot.h"
 #include "ifab/model/robot_model.h"
 #include "ifab/perception/calibration.h"
+#include "ifab/perception/range_bias.h"
 #include "ifab/perception/sweep_io.h"
 #include "ifab/sync/clock_sync.h"
 
@@ -120,6 +121,26 @@ class SweepRecorder {
   DeviceClockSync laser_sync_, arm_sync_;
 };
 
+/// The sweeps that identify the arm laser's range bias together with its mount (range_bias.h):
+/// besides the cube's sweeps, the floor seen from above at several heights (the paper's Fig. 7
+/// procedure: each height sees the floor at ranges from the height out and at every incidence).
+struct RangeBiasPlan {
+  std::vector<double> floor_heights{0.4, 0.6, 0.9, 1.3, 1.8};  ///< [m] the laser above the floor
+  Eigen::Vector2d floor_aim{0.0, -0.8};  ///< [m] the floor patch from the cube (radial, lateral), clear of it
+  double floor_elevation{1.48};          ///< [rad] the centre beam below horizontal (85 deg: almost straight down)
+  int floor_joint{0};                    ///< joint swept over the floor, 0-based
+  double floor_half_range{0.07};         ///< [rad] the sweep about the view (+-4 deg)
+  double floor_speed{0.07};              ///< [rad/s]
+  double floor_crop_radius{1.2};         ///< [m] keep floor points this close to the patch (a floor is
+                                         ///< flat only locally)
+  RangeBiasOptions identification;       ///< the solver's options
+  RangeBiasCompensation compensation;    ///< how the mission's sweeps apply the identified model
+
+  /// Reads {floor_heights, floor_aim, floor_elevation_deg, floor_joint (1-6), floor_range_deg,
+  /// floor_speed_deg_s, floor_crop_radius, identification: {...}, compensation: {...}}.
+  static RangeBiasPlan FromConfig(const ConfigNode& config);
+};
+
 /// Where and how to sweep a cube for the arm laser's calibration (Sec. V-C).
 struct LaserCalibrationPlan {
   Eigen::Vector3d cube_in_base{1.70, 0.0, 0.0};  ///< cube centre x, y [m] and yaw [rad] in base, roughly known
@@ -133,10 +154,11 @@ struct LaserCalibrationPlan {
                                                  ///< (design mount; 0 = all): the model of a cube on a
                                                  ///< flat floor holds only near it
   CalibrationOptions calibration;                ///< the solver's options
+  std::optional<RangeBiasPlan> range_bias;       ///< set: identify the range bias with the mount
 
   /// Reads `{cube_in_base: [x, y, yaw_deg], cube_size, sweeps: [...], scan_posture_deg: [6],
-  /// beam_stride, min_range, crop_radius, calibration: {...}}`; `cube_in_base` and `sweeps` are
-  /// required.
+  /// beam_stride, min_range, crop_radius, calibration: {...}, range_bias: {...}}`; `cube_in_base`
+  /// and `sweeps` are required.
   static LaserCalibrationPlan FromConfig(const ConfigNode& config);
 
   /// The cube's pose in base as planned (standing on z = 0).
@@ -161,5 +183,35 @@ CalibrationSummary CalibrateArmLaser(hal::Robot& robot, const RobotModel& model,
                                      const LaserCalibrationPlan& plan, const Vector6d& q_start,
                                      const std::function<void(const std::string&)>& progress,
                                      const SweepRecorderOptions& recorder_options = {});
+
+/// The arm laser's mount and range bias (CalibrateArmLaserAndRangeBias).
+struct ArmLaserCalibration {
+  CalibrationSummary mount;                ///< the mount, from the compensated cube sweeps when the bias is identified
+  CalibrationSummary mount_uncompensated;  ///< the first solve, from the raw sweeps (eq. 6 as written)
+  std::optional<RangeBiasSummary> bias;    ///< set when the plan has range_bias
+  RangeBiasCompensation compensation;      ///< for scan assembly: the plan's options with the model (empty: none)
+  std::vector<CalibrationSweep> floor_sweeps;  ///< raw floor sweeps (for inspection)
+};
+
+/// CalibrateArmLaser, and when the plan has `range_bias`: also records the floor sweeps, identifies
+/// the bias with the mount and the targets' poses from all sweeps (starting from the first mount
+/// solve), then solves the mount again from the cube sweeps compensated and guarded by the model.
+/// `raw` (if given) receives every recording.
+ArmLaserCalibration CalibrateArmLaserAndRangeBias(hal::Robot& robot, const RobotModel& model,
+                                                  const arm::ArmOptions& arm_options, const LaserCalibrationPlan& plan,
+                                                  const Vector6d& q_start,
+                                                  const std::function<void(const std::string&)>& progress,
+                                                  const SweepRecorderOptions& recorder_options = {},
+                                                  std::vector<SweepRecording>* raw = nullptr);
+
+/// The bias step alone on recorded sweeps: the first mount solve from `cube_sweeps`, the joint
+/// identification from them and `floor_sweeps`, the mount again from the compensated cube sweeps.
+/// (`ifab calibrate-bias` and CalibrateArmLaserAndRangeBias.)
+ArmLaserCalibration IdentifyMountAndRangeBias(const std::vector<CalibrationSweep>& cube_sweeps,
+                                              const std::vector<CalibrationSweep>& floor_sweeps,
+                                              const std::vector<RegistrationBody>& bodies,
+                                              const Pose3& T_tool0_laser_guess, const CalibrationOptions& calibration,
+                                              const RangeBiasPlan& bias_plan,
+                                              const std::function<void(const std::string&)>& progress = {});
 
 }  // namespace ifab::sequencer

@@ -5,6 +5,7 @@
 /// the beam direction) and optional mixed pixels at depth edges. Not the simulator (src/ifab/sim
 /// owns ground truth for the experiments); perception never includes that.
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -32,6 +33,8 @@ struct SyntheticLaser {
   bool noisy{true};
   bool mixed_pixels{false};  ///< beams straddling a depth edge return a range between the surfaces
   double mixed_gap{0.03};    ///< [m] range difference across the beam that makes a mixed pixel
+  /// Range bias b(range, incidence) added to every return (positive: reads long); unset: none.
+  std::function<double(double, double)> range_bias;
 };
 
 /// One beam from the laser pose along angle a (laser frame x-y plane). NaN if nothing is hit.
@@ -55,10 +58,16 @@ inline double CastBeam(const Scene& world, const Pose3& T_base_laser, double a, 
       return std::min(r1, r2) + rng.Uniform(0.15, 0.85) * std::abs(r1 - r2);
     }
   }
-  if (!laser.noisy) return r0;
+  double bias = 0.0;
+  if (laser.range_bias) {
+    const Eigen::Vector3d d = T_base_laser.linear() * Eigen::Vector3d(std::cos(a), std::sin(a), 0.0);
+    const auto hit = world.CastRay(o, d, laser.range_max);
+    bias = laser.range_bias(r0, std::acos(std::min(1.0, std::abs(hit->normal.dot(d)))));
+  }
+  if (!laser.noisy) return r0 + bias;
   double r = cast(a + rng.Normal(beam), rng.Normal(beam));
   if (!std::isfinite(r)) r = r0;
-  return r + rng.Normal(laser.noise.sigma_along);
+  return r + bias + rng.Normal(laser.noise.sigma_along);
 }
 
 /// A scan starting at t0; the laser pose is evaluated at each beam's own time.
