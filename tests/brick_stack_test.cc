@@ -17,6 +17,7 @@ TEST(BrickStack, ShortVariantPlacesEveryBrickNearItsDesignedPose) {
   o.experiment = "brick-stack";
   o.config_path = DataPath("experiments/brick-stack-short.yaml");
   o.out_dir = (std::filesystem::path(::testing::TempDir()) / "ifab_brick_stack_short").string();
+  o.force = true;  // ctest may run again over the same folder
   o.progress = false;
   const auto r = RunExperiment(o);
   EXPECT_FALSE(r["failed"].get<bool>()) << r.dump(2);

@@ -9,6 +9,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include "ifab/experiments/atomic_file.h"
+#include "ifab/experiments/brick_stack_setup.h"
 #include "ifab/core/angles.h"
 #include "ifab/core/data_path.h"
 #include "ifab/experiments/experiments.h"
@@ -43,6 +45,8 @@ class RecordingRobot final : public hal::Robot {
   void CommandTracks(const TrackCommand& c) override { sim_.CommandTracks(c); }
   void SendJointTrajectory(const JointTrajectory& t) override { sim_.SendJointTrajectory(t); }
   bool ArmBusy() const override { return sim_.ArmBusy(); }
+  std::string ArmRejection() const override { return sim_.ArmRejection(); }
+  std::optional<bool> VacuumHolding() const override { return sim_.VacuumHolding(); }
   void SetGripper(bool grip) override { sim_.SetGripper(grip); }
   void SetLaserActive(DeviceId id, bool active) override { sim_.SetLaserActive(id, active); }
   std::vector<LaserScan> TakeLaserScans(DeviceId id) override { return sim_.TakeLaserScans(id); }
@@ -53,7 +57,7 @@ class RecordingRobot final : public hal::Robot {
   std::vector<Stamped<Pose2>> truth;
   /// The sampled true base poses as CSV (t, x, y, theta; SI units), to redraw Fig. 6.
   void WriteTruthCsv(const std::string& path) const {
-    std::ofstream csv(path);
+    AtomicOfstream csv(path);
     csv << "t,x,y,theta\n";
     for (const auto& s : truth)
       csv << fmt::format("{:.4f},{:.5f},{:.5f},{:.6f}\n", s.t, s.value.x, s.value.y, s.value.theta);
@@ -76,17 +80,7 @@ struct Stats {
   double Mean() const { return n ? sum / n : 0.0; }
 };
 
-// What the brick-stack and base-maneuvers experiments share: the simulated machine, the stack's
-// components and options, read from one experiment YAML.
-struct Setup {
-  sim::SimOptions sim_options;
-  sequencer::MissionComponents parts;
-  sequencer::MissionOptions mission_options;
-  sequencer::BuildingPlan plan;
-  Vector6d q0;
-  bool calibrate_mount{true};                ///< calibrate the arm laser first (else the design mount)
-  sequencer::LaserCalibrationPlan calibration;  ///< how: sweeps of a cube on the floor (Sec. V-C)
-};
+}  // namespace
 
 Setup LoadSetup(const ConfigNode& c) {
   c.ExpectKeys({"seed", "robot", "site", "arm", "estimator", "planner", "controller", "base", "perception",
@@ -94,6 +88,7 @@ Setup LoadSetup(const ConfigNode& c) {
   Setup s;
   // The simulated machine (truth) and what the stack knows of it (design values, configs).
   const ConfigNode robot_yaml = ConfigNode::LoadFile(Beside(c, "robot"));
+  robot_yaml.ExpectKeys({"feeder_in_base", "sim"});
   s.sim_options = sim::SimOptions::FromConfig(robot_yaml["sim"]);
   s.sim_options.site = Beside(c, "site");
   if (auto b = c.Find("range_bias")) s.sim_options.arm_laser.bias_enabled = b->As<bool>();  // for comparisons
@@ -101,15 +96,17 @@ Setup LoadSetup(const ConfigNode& c) {
   parts.robot = LoadRobotModel(s.sim_options.urdf);
   parts.site = LoadSite(s.sim_options.site);
   parts.base_geometry = base::BaseGeometry::Load(Beside(c, "base"));
-  parts.planner = base::StompPlannerOptions::FromConfig(ConfigNode::LoadFile(Beside(c, "planner"))["base_planner"]);
-  parts.estimator = base::EstimatorOptions::FromConfig(ConfigNode::LoadFile(Beside(c, "estimator"))["estimator"]);
+  parts.planner = base::StompPlannerOptions::FromConfig(ConfigNode::LoadSection(Beside(c, "planner"), "base_planner"));
+  parts.estimator = base::EstimatorOptions::FromConfig(ConfigNode::LoadSection(Beside(c, "estimator"), "estimator"));
   parts.controller =
-      base::BaseControllerOptions::FromConfig(ConfigNode::LoadFile(Beside(c, "controller"))["base_controller"]);
+      base::BaseControllerOptions::FromConfig(ConfigNode::LoadSection(Beside(c, "controller"), "base_controller"));
   parts.controller.track_gauge = parts.base_geometry.track_gauge;
   parts.controller.max_track_speed = parts.base_geometry.max_track_speed;
   parts.arm = arm::ArmOptions::Load(Beside(c, "arm"));
   const ConfigNode perception = ConfigNode::LoadFile(Beside(c, "perception"));
-  if (auto a = perception.Find("assembly")) parts.assembly = ScanAssemblyOptions::FromConfig(*a);
+  // The sections `ifab register` / `ifab calibrate` read from the same file, and clock sync.
+  perception.ExpectKeys({"registration", "calibration", "scan_assembly", "clock_sync"});
+  if (auto a = perception.Find("scan_assembly")) parts.assembly = ScanAssemblyOptions::FromConfig(*a);
   if (auto r = perception.Find("registration")) parts.registration = RegistrationOptions::FromConfig(*r);
   if (auto sy = perception.Find("clock_sync")) parts.clock_sync = ClockSyncOptions::FromConfig(*sy);
   parts.T_tool0_arm_laser = parts.robot.T_tool0_arm_laser;  // the design mount until calibrated
@@ -158,6 +155,8 @@ Pose3 CalibrateMount(const Setup& setup, std::uint64_t seed, const RunContext& c
   return cs.T_tool0_laser;
 }
 
+namespace {
+
 nlohmann::json Run(const RunContext& ctx) {
   const auto wall_start = std::chrono::steady_clock::now();
   const ConfigNode& c = *ctx.config;
@@ -190,7 +189,7 @@ nlohmann::json Run(const RunContext& ctx) {
   for (const auto& log : logs)
     for (int k : log.bricks_placed)
       if (k >= 0 && k < static_cast<int>(placed.size())) placed_from[static_cast<std::size_t>(k)] = log.desired;
-  std::ofstream bricks_csv(out / "brick_errors.csv");
+  AtomicOfstream bricks_csv(out / "brick_errors.csv");
   bricks_csv << "brick,x_m,y_m,z_m,yaw_deg,error_long_mm,error_short_mm,error_z_mm,error_yaw_deg,error_away_mm\n";
   for (std::size_t k = 0; k < placed.size(); ++k) {
     const Pose3 design = mission.workpiece().DesignedBrickPose(static_cast<int>(k));
@@ -213,7 +212,7 @@ nlohmann::json Run(const RunContext& ctx) {
   }
 
   Stats end_m, end_deg, corr_m, corr_deg, after_m, after_deg, drift_m, drift_deg;
-  std::ofstream planned_csv(out / "trajectory_planned.csv"), est_csv(out / "trajectory_estimated.csv"),
+  AtomicOfstream planned_csv(out / "trajectory_planned.csv"), est_csv(out / "trajectory_estimated.csv"),
       visits_csv(out / "visits.csv");
   planned_csv << "visit,index,x,y,theta,v,omega\n";
   est_csv << "visit,t,x,y,theta\n";
@@ -324,8 +323,8 @@ nlohmann::json RunManeuvers(const RunContext& ctx) {
   const auto logs = mission.Run(setup.plan);
 
   Stats end_m, end_deg, drift_m, drift_deg, drift_deg_signed;
-  std::ofstream csv(std::filesystem::path(ctx.out_dir) / "maneuvers.csv");
-  std::ofstream est_csv(std::filesystem::path(ctx.out_dir) / "trajectory_estimated.csv");
+  AtomicOfstream csv(std::filesystem::path(ctx.out_dir) / "maneuvers.csv");
+  AtomicOfstream est_csv(std::filesystem::path(ctx.out_dir) / "trajectory_estimated.csv");
   est_csv << "visit,t,x,y,theta\n";
   // Signed drift (dx, dy in the estimated end frame; dtheta = true - estimated turn) beside the
   // absolute values: a systematic error shows as one sign. The estimated trajectories and the

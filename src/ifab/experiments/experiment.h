@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdint>
+#include <exception>
 #include <functional>
 #include <optional>
 #include <string>
@@ -22,9 +23,17 @@ struct RunContext {
   std::uint64_t seed{0};              ///< this run's seed
   std::string out_dir;                ///< where this run writes its files (exists)
   bool progress{true};                ///< print progress to the terminal
-  /// Report progress (phase text); no-op when progress is off.
+  /// Report progress (phase text); no-op when progress is off. Throws RunInterrupted once
+  /// Ctrl-C was pressed (so every experiment stops at its next report).
   void Progress(const std::string& text) const;
 };
+
+/// Thrown by RunContext::Progress after SIGINT; RunExperiment catches it.
+struct RunInterrupted : std::exception {
+  const char* what() const noexcept override { return "interrupted (SIGINT)"; }
+};
+/// True once SIGINT arrived during RunExperiment.
+bool Interrupted();
 
 /// One run returns its results as JSON (numbers in SI units unless the key says _mm / _deg).
 using ExperimentFn = std::function<nlohmann::json(const RunContext&)>;
@@ -35,6 +44,8 @@ struct ExperimentInfo {
   ExperimentFn run;
   /// Optional: rows (label, ours, paper) for the terminal table; may be empty.
   std::function<std::vector<std::vector<std::string>>(const nlohmann::json&)> table;
+  /// Optional: with --runs > 1, what the experiment adds over all its runs (results.json's "campaign").
+  std::function<nlohmann::json(const std::vector<nlohmann::json>&)> summarize;
 };
 
 /// Every experiment ifab knows.
@@ -48,6 +59,7 @@ struct RunOptions {
   int runs{1};                         ///< seeds seed, seed+1, ...
   int jobs{1};                         ///< runs in parallel
   std::string out_dir;                 ///< default: runs/<experiment>
+  bool force{false};                   ///< overwrite a folder that already holds a run
   bool progress{true};
 };
 

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "ifab/experiments/atomic_file.h"
 #include "ifab/core/angles.h"
 #include "ifab/core/random.h"
 #include "ifab/experiments/experiments.h"
@@ -20,7 +21,7 @@ nlohmann::json Run(const RunContext& ctx) {
   c.ExpectKeys({"seed", "laser", "heights_m", "scans_per_height", "centre_deg", "reference_deg"});
   const std::string laser_path =
       (std::filesystem::path(c.file()).parent_path() / c.Get<std::string>("laser")).string();
-  const sim::LrfModel lrf(sim::LrfOptions::FromConfig(ConfigNode::LoadFile(laser_path)["lrf"]));
+  const sim::LrfModel lrf(sim::LrfOptions::FromConfig(ConfigNode::LoadSection(laser_path, "lrf")));
   const std::vector<double> heights = c["heights_m"].AsNumbers();
   for (std::size_t i = 0; i < heights.size(); ++i)
     if (!(heights[i] > 0)) c["heights_m"][i].Fail("a positive height");
@@ -36,7 +37,7 @@ nlohmann::json Run(const RunContext& ctx) {
   const sim::World world(floor_only);
   RandomStream rng(ctx.seed);
 
-  std::ofstream csv(std::filesystem::path(ctx.out_dir) / "lrf_bias_points.csv");
+  AtomicOfstream csv(std::filesystem::path(ctx.out_dir) / "lrf_bias_points.csv");
   csv << "height_m,scan,beam,angle_from_vertical_deg,x_m,z_m\n";
   nlohmann::json bumps = nlohmann::json::array();
   for (const double h : heights) {

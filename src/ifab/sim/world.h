@@ -26,6 +26,10 @@ class World {
   /// Add a brick (true pose) to the world.
   void AddBrick(const SiteBox& brick);
   const std::vector<SiteBox>& bricks() const { return site_.bricks; }
+  /// Faults (faults.h): an obstacle that appears and goes, every brick moved by T (a bump).
+  void AddObstacle(const SiteBox& obstacle);
+  bool RemoveObstacle(const std::string& name);
+  void MoveBricks(const Pose3& T);
 
   /// First surface hit by the ray origin + t * direction (|direction| = 1), t in (t_min, t_max).
   std::optional<WorldHit> CastRay(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
