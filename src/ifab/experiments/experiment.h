@@ -45,7 +45,7 @@ struct ExperimentInfo {
   /// Optional: rows (label, ours, paper) for the terminal table; may be empty.
   std::function<std::vector<std::vector<std::string>>(const nlohmann::json&)> table;
   /// Optional: with --runs > 1, what the experiment adds over all its runs (results.json's "campaign").
-  std::function<nlohmann::json(const std::vector<nlohmann::json>&)> summarize;
+  std::function<nlohmann::json(const std::vector<nlohmann::json>&)> summarize{};
 };
 
 /// Every experiment ifab knows.

@@ -263,7 +263,10 @@ nlohmann::json Summarize(const std::vector<nlohmann::json>& runs) {
 }  // namespace
 
 ExperimentInfo FaultsExperiment() {
-  ExperimentInfo info{"faults", "issue 14: short missions with injected faults; every fault's outcome", Run, nullptr};
+  ExperimentInfo info;
+  info.name = "faults";
+  info.description = "issue 14: short missions with injected faults; every fault's outcome";
+  info.run = Run;
   info.summarize = Summarize;
   return info;
 }

@@ -54,9 +54,12 @@ KDL::RigidBodyInertia ToKdlInertia(const urdf::Inertial& i) {
 }
 
 bool Finite(const urdf::Vector3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+// Finite, and within a kilometre: urdfdom accepts 1e308, which overflows forward kinematics.
 bool Finite(const urdf::Pose& p) {
-  return Finite(p.position) && std::isfinite(p.rotation.x) && std::isfinite(p.rotation.y) &&
-         std::isfinite(p.rotation.z) && std::isfinite(p.rotation.w);
+  const auto& v = p.position;
+  return Finite(v) && std::abs(v.x) <= 1e3 && std::abs(v.y) <= 1e3 && std::abs(v.z) <= 1e3 &&
+         std::isfinite(p.rotation.x) && std::isfinite(p.rotation.y) && std::isfinite(p.rotation.z) &&
+         std::isfinite(p.rotation.w);
 }
 
 // What the dynamics (arm/dynamics.h, KDL) rely on: finite origins and axes, and for each link
@@ -69,7 +72,7 @@ void CheckPhysical(const urdf::ModelInterface& m, const std::string& path) {
     if (!(std::isfinite(i.mass) && i.mass > 0))
       ThrowInputError("{}: link '{}': inertial mass: expected a positive number [kg], got {}", path, name, i.mass);
     if (!Finite(i.origin))
-      ThrowInputError("{}: link '{}': inertial origin: expected finite xyz and rpy", path, name);
+      ThrowInputError("{}: link '{}': inertial origin: expected finite xyz (within 1 km) and rpy", path, name);
     Eigen::Matrix3d I;
     I << i.ixx, i.ixy, i.ixz, i.ixy, i.iyy, i.iyz, i.ixz, i.iyz, i.izz;
     const bool finite = I.allFinite();
@@ -84,7 +87,7 @@ void CheckPhysical(const urdf::ModelInterface& m, const std::string& path) {
   }
   for (const auto& [name, joint] : m.joints_) {
     if (!Finite(joint->parent_to_joint_origin_transform))
-      ThrowInputError("{}: joint '{}': origin: expected finite xyz and rpy", path, name);
+      ThrowInputError("{}: joint '{}': origin: expected finite xyz (within 1 km) and rpy", path, name);
     const bool moves = joint->type != urdf::Joint::FIXED && joint->type != urdf::Joint::FLOATING &&
                        joint->type != urdf::Joint::PLANAR;
     const double axis_norm = std::sqrt(joint->axis.x * joint->axis.x + joint->axis.y * joint->axis.y +

@@ -37,6 +37,12 @@ TEST(UrdfHostile, TheRobotLoadsFromText) {
   EXPECT_EQ(ParseRobotModel(Urdf(), "robot.urdf").joint_names.size(), 6u);
 }
 
+TEST(UrdfHostile, RejectsNonFiniteMasses) {
+  // urdfdom parses these without complaint.
+  EXPECT_THAT(UrdfError("<mass value=\"965\"/>", "<mass value=\"nan\"/>"), HasSubstr("got nan"));
+  EXPECT_THAT(UrdfError("<mass value=\"965\"/>", "<mass value=\"inf\"/>"), HasSubstr("got inf"));
+}
+
 TEST(UrdfHostile, RejectsNonPositiveMasses) {
   EXPECT_THAT(UrdfError("<mass value=\"965\"/>", "<mass value=\"-965\"/>"),
               HasSubstr("hostile.urdf: link 'base_link': inertial mass: expected a positive number [kg], got -965"));
@@ -58,10 +64,12 @@ TEST(UrdfHostile, RejectsNonFiniteOrigins) {
   std::string text = Urdf();
   const auto joint = text.find("<joint name=\"joint_2\"");
   ASSERT_NE(joint, std::string::npos);
-  const auto xyz = text.find("xyz=\"", joint);
-  text.replace(xyz, 5, "xyz=\"nan ");
+  // urdfdom itself refuses "nan" and "1e999" but takes 1e308 (forward kinematics then overflow).
+  const auto xyz = text.find("xyz=\"0.175", joint);
+  ASSERT_NE(xyz, std::string::npos);
+  text.replace(xyz, 10, "xyz=\"1e308");
   EXPECT_THAT(ErrorOf([&] { ParseRobotModel(text, "hostile.urdf"); }),
-              HasSubstr("hostile.urdf: joint 'joint_2': origin: expected finite xyz and rpy"));
+              HasSubstr("hostile.urdf: joint 'joint_2': origin: expected finite xyz (within 1 km) and rpy"));
 }
 
 std::string SiteError(const std::string& boundary) {

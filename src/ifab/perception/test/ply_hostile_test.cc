@@ -81,7 +81,7 @@ TEST(PlyHostile, RejectsListCountsThatAreNotWholeNumbersOfTheirType) {
     std::istringstream in(face);
     ReadPly(in, "hostile.ply");
   });
-  EXPECT_NE(e.find("list 'idx' has length -1e+30"), std::string::npos) << e;
+  EXPECT_NE(e.find("list 'idx' has length -1"), std::string::npos) << e;
 }
 
 // A 150-byte file claiming 199,999,999 vertices with 40 fields: the reader must fail on the
