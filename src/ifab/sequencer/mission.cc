@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <cmath>
+#include <limits>
 #include <optional>
 
 #include "ifab/core/angles.h"
@@ -35,7 +36,7 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
   c.ReadNonNegative("settle_time", o.settle_time);
   c.ReadPositive("plan_attempts", o.plan_attempts);
   c.ReadPositive("max_sweeps", o.max_sweeps);
-  c.ReadNonNegative("min_inliers", o.min_inliers);
+  c.ReadNonNegative("min_inliers", o.min_inliers, std::numeric_limits<int>::max());  // a threshold, sizes nothing
   c.ReadPositive("max_localization_std_m", o.max_localization_std_m);
   c.ReadPositive("max_localization_std_deg", o.max_localization_std_deg);
   c.ReadPositive("max_localization_jump_m", o.max_localization_jump_m);

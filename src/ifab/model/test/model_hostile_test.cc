@@ -38,9 +38,11 @@ TEST(UrdfHostile, TheRobotLoadsFromText) {
 }
 
 TEST(UrdfHostile, RejectsNonFiniteMasses) {
-  // urdfdom parses these without complaint.
-  EXPECT_THAT(UrdfError("<mass value=\"965\"/>", "<mass value=\"nan\"/>"), HasSubstr("got nan"));
-  EXPECT_THAT(UrdfError("<mass value=\"965\"/>", "<mass value=\"inf\"/>"), HasSubstr("got inf"));
+  // urdfdom reads these without complaint, as a mass of 0.
+  EXPECT_THAT(UrdfError("<mass value=\"965\"/>", "<mass value=\"nan\"/>"),
+              HasSubstr("link 'base_link': inertial mass: expected a positive number [kg]"));
+  EXPECT_THAT(UrdfError("<mass value=\"965\"/>", "<mass value=\"inf\"/>"),
+              HasSubstr("inertial mass: expected a positive number [kg]"));
 }
 
 TEST(UrdfHostile, RejectsNonPositiveMasses) {
