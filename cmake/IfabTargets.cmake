@@ -2,9 +2,13 @@
 
 # One place sets the warnings for every target (KISS-ICP's habit); -Werror with IFAB_WERROR.
 function(ifab_set_warnings target)
-  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow=local
+  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic
                          -Wnon-virtual-dtor -Wcast-align -Wunused -Woverloaded-virtual
                          -Wno-deprecated-copy)
+  # GCC's local-only shadowing check; clang (the sanitizer and fuzz builds) has no such option.
+  if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
+    target_compile_options(${target} PRIVATE -Wshadow=local)
+  endif()
   if(IFAB_WERROR)
     target_compile_options(${target} PRIVATE -Werror)
   endif()

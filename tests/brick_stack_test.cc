@@ -35,6 +35,7 @@ RunOptions ShortRun(const std::string& config, const std::string& name) {
   o.experiment = "brick-stack";
   o.config_path = config;
   o.out_dir = (std::filesystem::path(::testing::TempDir()) / name).string();
+  o.force = true;  // ctest may run again over the same folder
   o.progress = false;
   return o;
 }

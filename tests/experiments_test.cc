@@ -21,6 +21,7 @@ TEST(LrfBias, BumpShrinksWithHeightAndIsAbout3cmAt0_4m) {
   RunOptions o;
   o.experiment = "lrf-bias";
   o.out_dir = TempDir("lrf_bias");
+  o.force = true;  // ctest may run again over the same folder
   o.progress = false;
   const auto r = RunExperiment(o);
   const auto bumps = r["bump_height_mm"];

@@ -47,6 +47,7 @@ json RunConfig(const std::string& config, const std::string& out) {
   o.experiment = "brick-stack";
   o.config_path = config;
   o.out_dir = out;
+  o.force = true;  // ctest may run again over the same folder
   o.progress = false;
   return RunExperiment(o);
 }

@@ -62,7 +62,7 @@ void AddPlanBaseCommand(CLI::App& app, int& exit_code) {
     site.RequireBoundary(args->site, "ifab plan-base");
     const base::BaseGeometry robot = base::BaseGeometry::Load(args->robot);
     const base::StompPlannerOptions options =
-        base::StompPlannerOptions::FromConfig(ConfigNode::LoadFile(args->config)["base_planner"]);
+        base::StompPlannerOptions::FromConfig(ConfigNode::LoadSection(args->config, "base_planner"));
     const base::StompBasePlanner planner(base::PlanningSceneFromSite(site), robot, options);
     const base::PlanResult r = planner.Plan(start, goal, RandomStream(args->seed));
     if (args->json) {

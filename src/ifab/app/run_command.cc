@@ -22,10 +22,12 @@ void AddRunCommand(CLI::App& app, int& exit_code) {
   sub->add_option("--runs", options->runs, "Number of seeded runs")->check(CLI::PositiveNumber);
   sub->add_option("--jobs", options->jobs, "Runs in parallel")->check(CLI::PositiveNumber);
   sub->add_option("--out", options->out_dir, "Output folder (default: runs/NAME)");
+  sub->add_flag("--force", options->force, "Overwrite the output folder if it already holds a run");
   sub->add_flag("!--quiet", options->progress, "No progress or table on the terminal");
   sub->callback([options, &exit_code] {
     const auto results = experiments::RunExperiment(*options);
     exit_code = results.value("failed_runs", 0) > 0 || results.value("failed", false) ? 1 : 0;
+    if (results.value("interrupted", false)) exit_code = 130;  // the shell's code for SIGINT
   });
 }
 

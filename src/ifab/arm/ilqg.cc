@@ -192,6 +192,7 @@ std::string IlqgOptions::Validate() const {
 
 IlqgOptions LoadIlqgOptions(const std::string& path) {
   const ConfigNode root = ConfigNode::LoadFile(path);
+  root.ExpectKeys({"ilqg", "ik", "primitives"});  // the arm file (primitives.cc)
   auto section = root.Find("ilqg");
   return section ? IlqgOptions::FromConfig(*section) : IlqgOptions{};
 }

@@ -249,9 +249,16 @@ PrimitiveResult ArmPrimitives::PlaceBrick(const Vector6d& q_current, const Pose3
 ExecuteResult ExecuteSteps(hal::Robot& robot, const std::vector<ArmStep>& steps, const ExecuteOptions& options) {
   ExecuteResult result;
   const Seconds t0 = robot.Now();
+  bool holding = options.holding;
   for (const ArmStep& step : steps) {
     if (!step.trajectory.points.empty()) {
       robot.SendJointTrajectory(step.trajectory);
+      if (const std::string why = robot.ArmRejection(); !why.empty()) {
+        result.ok = false;
+        result.rejected = true;
+        result.message = fmt::format("step '{}': the arm controller rejected the trajectory: {}", step.name, why);
+        break;
+      }
       const Seconds deadline = robot.Now() + step.trajectory.Duration() + options.timeout_margin;
       do {
         robot.Wait(options.poll);
@@ -266,6 +273,16 @@ ExecuteResult ExecuteSteps(hal::Robot& robot, const std::vector<ArmStep>& steps,
     }
     if (step.gripper != GripperAction::kNone) robot.SetGripper(step.gripper == GripperAction::kGrip);
     if (step.settle > 0.0) robot.Wait(step.settle);
+    if (step.gripper != GripperAction::kNone) holding = step.gripper == GripperAction::kGrip;
+    // A brick that should be held but is not (a failed grip or a drop) ends the motion here:
+    // carrying on would "place" nothing.
+    if (holding && robot.VacuumHolding() == false) {
+      result.ok = false;
+      result.lost_grip = true;
+      result.message = fmt::format("after step '{}': the vacuum sensor reports no brick", step.name);
+      ++result.steps_done;
+      break;
+    }
     ++result.steps_done;
   }
   result.elapsed = robot.Now() - t0;

@@ -140,12 +140,15 @@ class ArmPrimitives {
 struct ExecuteOptions {
   Seconds poll{0.02};            ///< how often ArmBusy() is checked [s]
   Seconds timeout_margin{5.0};   ///< give up this long after a trajectory should have ended [s]
+  bool holding{false};           ///< the gripper holds a brick at the start (checked by the vacuum sensor)
 };
 
 struct ExecuteResult {
   bool ok{true};
   std::string message;
-  int steps_done{0};
+  int steps_done{0};             ///< steps completed (the failed one not counted)
+  bool rejected{false};          ///< the arm controller refused step steps_done (the arm did not move)
+  bool lost_grip{false};         ///< the vacuum sensor says the brick is gone (or the grip did not take)
   Seconds elapsed{0.0};  ///< host time spent [s]
 };
 

@@ -8,6 +8,17 @@
 #include <sstream>
 
 namespace ifab {
+namespace {
+
+// A map key as text; a key that is itself a list or a map (`[a]: 1`) is no field name.
+std::string KeyText(const YAML::Node& key, const std::string& file, const std::string& path) {
+  if (!key.IsScalar())
+    ThrowInputError("{}:{}: {}: expected field names, got a {} as a key", file, key.Mark().line + 1,
+                    path.empty() ? "(top level)" : path, key.IsSequence() ? "list" : "map");
+  return key.Scalar();
+}
+
+}  // namespace
 
 ConfigNode ConfigNode::LoadFile(const std::string& path) {
   std::ifstream in(path);
@@ -15,6 +26,12 @@ ConfigNode ConfigNode::LoadFile(const std::string& path) {
   std::stringstream ss;
   ss << in.rdbuf();
   return FromString(ss.str(), path);
+}
+
+ConfigNode ConfigNode::LoadSection(const std::string& path, const char* section) {
+  const ConfigNode root = LoadFile(path);
+  root.ExpectKeys({section});
+  return root[section];
 }
 
 ConfigNode ConfigNode::FromString(const std::string& text, const std::string& name) {
@@ -105,7 +122,7 @@ ConfigNode ConfigNode::operator[](std::size_t i) const {
 std::vector<std::string> ConfigNode::Keys() const {
   std::vector<std::string> keys;
   if (!node_.IsMap()) return keys;
-  for (const auto& kv : node_) keys.push_back(kv.first.as<std::string>());
+  for (const auto& kv : node_) keys.push_back(KeyText(kv.first, *file_, path_));
   return keys;
 }
 
@@ -113,7 +130,7 @@ void ConfigNode::ExpectKeys(std::initializer_list<const char*> allowed) const {
   if (IsNull()) return;
   ExpectMap();
   for (const auto& kv : node_) {
-    const std::string key = kv.first.as<std::string>();
+    const std::string key = KeyText(kv.first, *file_, path_);
     bool ok = false;
     for (const char* a : allowed) ok = ok || key == a;
     if (!ok) {
@@ -196,11 +213,8 @@ void ConfigNode::ReadPositive(const std::string& key, double& value) const {
     if (!(value > 0.0)) c->Fail("a positive number");
   }
 }
-void ConfigNode::ReadPositive(const std::string& key, int& value) const {
-  if (auto c = Find(key)) {
-    value = c->As<int>();
-    if (value <= 0) c->Fail("a positive integer");
-  }
+void ConfigNode::ReadPositive(const std::string& key, int& value, int hi) const {
+  ReadInRange(key, value, 1, hi);
 }
 void ConfigNode::ReadNonNegative(const std::string& key, double& value) const {
   if (auto c = Find(key)) {
@@ -208,10 +222,17 @@ void ConfigNode::ReadNonNegative(const std::string& key, double& value) const {
     if (value < 0.0) c->Fail("a number >= 0");
   }
 }
-void ConfigNode::ReadNonNegative(const std::string& key, int& value) const {
+void ConfigNode::ReadNonNegative(const std::string& key, int& value, int hi) const {
+  ReadInRange(key, value, 0, hi);
+}
+void ConfigNode::ReadInRange(const std::string& key, int& value, int lo, int hi) const {
   if (auto c = Find(key)) {
     value = c->As<int>();
-    if (value < 0) c->Fail("an integer >= 0");
+    if (value < lo || value > hi) {
+      if (lo == 1) c->Fail(fmt::format("a positive integer (at most {})", hi));
+      if (lo == 0) c->Fail(fmt::format("an integer >= 0 (at most {})", hi));
+      c->Fail(fmt::format("an integer in [{}, {}]", lo, hi));
+    }
   }
 }
 void ConfigNode::ReadInRange(const std::string& key, double& value, double lo, double hi) const {

@@ -23,6 +23,9 @@ class ConfigNode {
  public:
   /// Load a YAML file; throws InputError if it cannot be read or parsed.
   static ConfigNode LoadFile(const std::string& path);
+  /// Load a YAML file whose top level holds `section` and nothing else (a misspelt or misplaced
+  /// section would otherwise be ignored silently); returns that section.
+  static ConfigNode LoadSection(const std::string& path, const char* section);
   /// Parse YAML text; `name` stands for the file in error messages.
   static ConfigNode FromString(const std::string& text, const std::string& name = "<string>");
   /// This config with `overlay` on top: maps merge key by key (recursively), anything else in
@@ -75,12 +78,16 @@ class ConfigNode {
   void Read(const std::string& key, T& value) const {
     if (auto c = Find(key)) value = c->template As<T>();
   }
-  /// Same, and require value > 0 / >= 0 / within [lo, hi].
+  /// Same, and require value > 0 / >= 0 / within [lo, hi]. An integer is a count that sizes
+  /// something (beams, rollouts, bricks): it is also bounded above, by kMaxCount unless the
+  /// field gives a tighter bound, so that a typo cannot ask for gigabytes.
+  static constexpr int kMaxCount = 10'000'000;
   void ReadPositive(const std::string& key, double& value) const;
-  void ReadPositive(const std::string& key, int& value) const;
+  void ReadPositive(const std::string& key, int& value, int hi = kMaxCount) const;
   void ReadNonNegative(const std::string& key, double& value) const;
-  void ReadNonNegative(const std::string& key, int& value) const;
+  void ReadNonNegative(const std::string& key, int& value, int hi = kMaxCount) const;
   void ReadInRange(const std::string& key, double& value, double lo, double hi) const;
+  void ReadInRange(const std::string& key, int& value, int lo, int hi) const;
 
   /// "file:line: field.path" for messages.
   std::string Where() const;

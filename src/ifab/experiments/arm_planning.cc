@@ -8,6 +8,7 @@
 #include <fstream>
 
 #include "ifab/experiments/arm_planning_experiment.h"
+#include "ifab/experiments/atomic_file.h"
 #include "ifab/core/error.h"
 #include "ifab/experiments/experiments.h"
 #include "ifab/model/robot_model.h"
@@ -26,13 +27,14 @@ nlohmann::json Run(const RunContext& ctx) {
   if (auto robot_yaml = c.Find("robot_yaml")) {
     // The on-board feeder's brick pose (base frame), as the algorithms know it.
     const ConfigNode r = ConfigNode::LoadFile((dir / robot_yaml->As<std::string>()).string());
+    r.ExpectKeys({"feeder_in_base", "sim"});
     const auto v = r["feeder_in_base"].AsNumbers(6);
     base.T_base_feeder_brick = PoseFromXyzRpy(v[0], v[1], v[2], v[3], v[4], v[5]);
   }
   const ArmPlanningExperimentConfig config = ArmPlanningExperimentConfig::FromConfig(c, base);
   ctx.Progress(fmt::format("arm-planning: {} seeded motions, iLQG on one thread", config.cases));
   const ArmPlanningResult r = RunArmPlanningExperiment(robot, config, ctx.seed);
-  std::ofstream csv(fs::path(ctx.out_dir) / "arm_planning_cases.csv");
+  AtomicOfstream csv(fs::path(ctx.out_dir) / "arm_planning_cases.csv");
   IFAB_THROW_UNLESS(csv.good(), "{}: cannot write arm_planning_cases.csv", ctx.out_dir);
   csv << r.CasesCsv();
   return r.results;

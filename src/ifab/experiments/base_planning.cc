@@ -10,6 +10,7 @@
 #include <fstream>
 
 #include "ifab/experiments/base_planning_experiment.h"
+#include "ifab/experiments/atomic_file.h"
 #include "ifab/base/planner/site_scene.h"
 #include "ifab/core/error.h"
 #include "ifab/experiments/experiments.h"
@@ -29,8 +30,8 @@ nlohmann::json Run(const RunContext& ctx) {
   const base::BaseGeometry robot = base::BaseGeometry::Load((dir / c.Get<std::string>("robot")).string());
   base::StompPlannerOptions options;
   if (auto p = c.Find("planner")) {
-    const ConfigNode planner_file = ConfigNode::LoadFile((dir / p->As<std::string>()).string());
-    options = base::StompPlannerOptions::FromConfig(planner_file["base_planner"]);
+    options = base::StompPlannerOptions::FromConfig(
+        ConfigNode::LoadSection((dir / p->As<std::string>()).string(), "base_planner"));
   }
   options.num_threads = 1;  // plan times are single-core wall times
   c.ReadPositive("rollout_threads", options.num_threads);
@@ -45,7 +46,7 @@ nlohmann::json Run(const RunContext& ctx) {
   std::vector<BasePlanningCase> cases;
   nlohmann::json results = RunBasePlanningExperiment(planner, sampling, &cases);
 
-  std::ofstream csv(fs::path(ctx.out_dir) / "base_planning_cases.csv");
+  AtomicOfstream csv(fs::path(ctx.out_dir) / "base_planning_cases.csv");
   IFAB_THROW_UNLESS(csv.good(), "{}: cannot write base_planning_cases.csv", ctx.out_dir);
   csv << "case,start_x,start_y,start_theta,goal_x,goal_y,goal_theta,status,plan_ms,iterations,phase1_iterations,"
          "phase2_iterations,min_clearance_m,max_lateral_velocity_mps,length_m,duration_s\n";

@@ -9,6 +9,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include "ifab/experiments/atomic_file.h"
+#include "ifab/experiments/brick_stack_setup.h"
 #include "ifab/core/angles.h"
 #include "ifab/core/data_path.h"
 #include "ifab/experiments/experiments.h"
@@ -47,6 +49,8 @@ class RecordingRobot final : public hal::Robot {
   void CommandTracks(const TrackCommand& c) override { sim_.CommandTracks(c); }
   void SendJointTrajectory(const JointTrajectory& t) override { sim_.SendJointTrajectory(t); }
   bool ArmBusy() const override { return sim_.ArmBusy(); }
+  std::string ArmRejection() const override { return sim_.ArmRejection(); }
+  std::optional<bool> VacuumHolding() const override { return sim_.VacuumHolding(); }
   void SetGripper(bool grip) override { sim_.SetGripper(grip); }
   void SetLaserActive(DeviceId id, bool active) override {
     if (replay && id == DeviceId::kArmLaser) replay->ArmLaser(sim_.Now(), active);
@@ -61,7 +65,7 @@ class RecordingRobot final : public hal::Robot {
   std::vector<Stamped<Pose2>> truth;
   /// The sampled true base poses as CSV (t, x, y, theta; SI units), to redraw Fig. 6.
   void WriteTruthCsv(const std::string& path) const {
-    std::ofstream csv(path);
+    AtomicOfstream csv(path);
     csv << "t,x,y,theta\n";
     for (const auto& s : truth)
       csv << fmt::format("{:.4f},{:.5f},{:.5f},{:.6f}\n", s.t, s.value.x, s.value.y, s.value.theta);
@@ -85,21 +89,6 @@ struct Stats {
   double Mean() const { return n ? sum / n : 0.0; }
 };
 
-// What the brick-stack and base-maneuvers experiments share: the simulated machine, the stack's
-// components and options, read from one experiment YAML.
-struct Setup {
-  sim::SimOptions sim_options;
-  sequencer::MissionComponents parts;
-  sequencer::MissionOptions mission_options;
-  sequencer::BuildingPlan plan;
-  Vector6d q0;
-  bool calibrate_mount{true};                ///< calibrate the arm laser first (else the design mount)
-  bool compensate_bias{true};                ///< identify the range bias with the mount if the plan says how
-  sequencer::LaserCalibrationPlan calibration;  ///< how: sweeps of a cube on the floor (Sec. V-C)
-  Pose3 T_base_feeder_design{Pose3::Identity()};  ///< the feeder as designed (robot YAML)
-  bool as_built_world{true};                 ///< `world: as-built` (default) or `exact` (model = world)
-  sim::AsBuiltTolerances tolerances;         ///< data/sim/as_built.yaml (simulator only)
-};
 
 // The path of an optional config key (relative to the config), else a file under data/.
 std::string BesideOr(const ConfigNode& c, const std::string& key, const std::string& data_default) {
@@ -115,15 +104,17 @@ void LoadStackSide(const ConfigNode& c, Setup& s) {
   parts.site = LoadSite(Beside(c, "site"));
   parts.site.RequireBoundary(Beside(c, "site"), "ifab run");
   parts.base_geometry = base::BaseGeometry::Load(Beside(c, "base"));
-  parts.planner = base::StompPlannerOptions::FromConfig(ConfigNode::LoadFile(Beside(c, "planner"))["base_planner"]);
-  parts.estimator = base::EstimatorOptions::FromConfig(ConfigNode::LoadFile(Beside(c, "estimator"))["estimator"]);
+  parts.planner = base::StompPlannerOptions::FromConfig(ConfigNode::LoadSection(Beside(c, "planner"), "base_planner"));
+  parts.estimator = base::EstimatorOptions::FromConfig(ConfigNode::LoadSection(Beside(c, "estimator"), "estimator"));
   parts.controller =
-      base::BaseControllerOptions::FromConfig(ConfigNode::LoadFile(Beside(c, "controller"))["base_controller"]);
+      base::BaseControllerOptions::FromConfig(ConfigNode::LoadSection(Beside(c, "controller"), "base_controller"));
   parts.controller.track_gauge = parts.base_geometry.track_gauge;
   parts.controller.max_track_speed = parts.base_geometry.max_track_speed;
   parts.arm = arm::ArmOptions::Load(Beside(c, "arm"));
   const ConfigNode perception = ConfigNode::LoadFile(Beside(c, "perception"));
-  if (auto a = perception.Find("assembly")) parts.assembly = ScanAssemblyOptions::FromConfig(*a);
+  // The sections `ifab register` / `ifab calibrate` read from the same file, and clock sync.
+  perception.ExpectKeys({"registration", "calibration", "scan_assembly", "clock_sync"});
+  if (auto a = perception.Find("scan_assembly")) parts.assembly = ScanAssemblyOptions::FromConfig(*a);
   if (auto r = perception.Find("registration")) parts.registration = RegistrationOptions::FromConfig(*r);
   if (auto sy = perception.Find("clock_sync")) parts.clock_sync = ClockSyncOptions::FromConfig(*sy);
   parts.T_tool0_arm_laser = parts.robot.T_tool0_arm_laser;  // the design mount until calibrated
@@ -148,6 +139,8 @@ void LoadSimSide(const ConfigNode& c, Setup& s) {
 }
 
 // This seed's as-built world (the same machine and floor for the calibration and the mission).
+}  // namespace
+
 void DrawWorld(Setup& s, std::uint64_t seed) {
   if (!s.as_built_world) return;
   s.sim_options.as_built = sim::DrawAsBuilt(s.tolerances, s.parts.robot, s.parts.site, s.sim_options.arm_laser, seed);
@@ -181,6 +174,8 @@ Setup LoadSetup(const ConfigNode& c) {
 
 // Scoring only: the identified range bias against the simulated unit's curve, over the ranges and
 // incidences where compensation uses it (its std below the guard) and beside it.
+namespace {
+
 nlohmann::json ScoreRangeBias(const RangeBiasSummary& bias, const RangeBiasCompensation& comp,
                               const sim::LrfOptions& unit) {
   Stats err, err_used, z;
@@ -264,6 +259,8 @@ nlohmann::json AsBuiltSummary(const Setup& setup) {
           {"arm_laser_mount_error", mount(a.arm_laser_mount_error)}};
 }
 
+}  // namespace
+
 Pose3 CalibrateMount(const Setup& setup, std::uint64_t seed, const RunContext& ctx, nlohmann::json* info,
                      RangeBiasCompensation* compensation) {
   const sequencer::LaserCalibrationPlan& plan = setup.calibration;
@@ -302,6 +299,8 @@ Pose3 CalibrateMount(const Setup& setup, std::uint64_t seed, const RunContext& c
   }
   return cs.T_tool0_laser;
 }
+
+namespace {
 
 nlohmann::json Run(const RunContext& ctx) {
   const auto wall_start = std::chrono::steady_clock::now();
@@ -346,7 +345,7 @@ nlohmann::json Run(const RunContext& ctx) {
   for (const auto& log : logs)
     for (int k : log.bricks_placed)
       if (k >= 0 && k < static_cast<int>(placed.size())) placed_from[static_cast<std::size_t>(k)] = log.desired;
-  std::ofstream bricks_csv(out / "brick_errors.csv");
+  AtomicOfstream bricks_csv(out / "brick_errors.csv");
   bricks_csv << "brick,x_m,y_m,z_m,yaw_deg,error_long_mm,error_short_mm,error_z_mm,error_yaw_deg,error_away_mm\n";
   for (std::size_t k = 0; k < placed.size(); ++k) {
     const Pose3 design = mission.workpiece().DesignedBrickPose(static_cast<int>(k));
@@ -369,7 +368,7 @@ nlohmann::json Run(const RunContext& ctx) {
   }
 
   Stats end_m, end_deg, corr_m, corr_deg, after_m, after_deg, drift_m, drift_deg;
-  std::ofstream planned_csv(out / "trajectory_planned.csv"), est_csv(out / "trajectory_estimated.csv"),
+  AtomicOfstream planned_csv(out / "trajectory_planned.csv"), est_csv(out / "trajectory_estimated.csv"),
       visits_csv(out / "visits.csv");
   planned_csv << "visit,index,x,y,theta,v,omega\n";
   est_csv << "visit,t,x,y,theta\n";
@@ -491,8 +490,8 @@ nlohmann::json RunManeuvers(const RunContext& ctx) {
   const auto logs = mission.Run(setup.plan);
 
   Stats end_m, end_deg, drift_m, drift_deg, drift_deg_signed;
-  std::ofstream csv(std::filesystem::path(ctx.out_dir) / "maneuvers.csv");
-  std::ofstream est_csv(std::filesystem::path(ctx.out_dir) / "trajectory_estimated.csv");
+  AtomicOfstream csv(std::filesystem::path(ctx.out_dir) / "maneuvers.csv");
+  AtomicOfstream est_csv(std::filesystem::path(ctx.out_dir) / "trajectory_estimated.csv");
   est_csv << "visit,t,x,y,theta\n";
   // Signed drift (dx, dy in the estimated end frame; dtheta = true - estimated turn) beside the
   // absolute values: a systematic error shows as one sign. The estimated trajectories and the

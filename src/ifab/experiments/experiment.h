@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdint>
+#include <exception>
 #include <functional>
 #include <optional>
 #include <string>
@@ -23,9 +24,17 @@ struct RunContext {
   std::string out_dir;                ///< where this run writes its files (exists)
   bool progress{true};                ///< print progress to the terminal
   /// Report progress (phase text; `fraction` of the run done in [0, 1], negative when unknown);
-  /// no-op when progress is off. A terminal shows one live line (progress.h).
+  /// no-op when progress is off. A terminal shows one live line (progress.h). Throws
+  /// RunInterrupted once Ctrl-C was pressed (so every experiment stops at its next report).
   void Progress(const std::string& text, double fraction = -1.0) const;
 };
+
+/// Thrown by RunContext::Progress after SIGINT; RunExperiment catches it.
+struct RunInterrupted : std::exception {
+  const char* what() const noexcept override { return "interrupted (SIGINT)"; }
+};
+/// True once SIGINT arrived during RunExperiment.
+bool Interrupted();
 
 /// One run returns its results as JSON (numbers in SI units unless the key says _mm / _deg).
 using ExperimentFn = std::function<nlohmann::json(const RunContext&)>;
@@ -36,6 +45,8 @@ struct ExperimentInfo {
   ExperimentFn run;
   /// Optional: rows (label, ours, paper) for the terminal table; may be empty.
   std::function<std::vector<std::vector<std::string>>(const nlohmann::json&)> table;
+  /// Optional: with --runs > 1, what the experiment adds over all its runs (results.json's "campaign").
+  std::function<nlohmann::json(const std::vector<nlohmann::json>&)> summarize{};
 };
 
 /// Every experiment ifab knows.
@@ -49,6 +60,7 @@ struct RunOptions {
   int runs{1};                         ///< seeds seed, seed+1, ...
   int jobs{1};                         ///< runs in parallel
   std::string out_dir;                 ///< default: runs/<experiment>
+  bool force{false};                   ///< overwrite a folder that already holds a run
   bool progress{true};
 };
 

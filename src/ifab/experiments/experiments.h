@@ -12,5 +12,6 @@ ExperimentInfo ArmPlanningExperiment();  ///< paper Sec. IV: iLQG on seeded bric
 ExperimentInfo BasePlanningExperiment();  ///< paper Sec. III-A: STOMP on seeded start/goal poses
 ExperimentInfo RegistrationConsistencyExperiment();  ///< paper Table I (perception_experiments.cc)
 ExperimentInfo CalibrationConsistencyExperiment();   ///< paper Table II (perception_experiments.cc)
+ExperimentInfo FaultsExperiment();  ///< issue 14: missions with injected faults (faults.cc)
 
 }  // namespace ifab::experiments

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "ifab/experiments/atomic_file.h"
 #include "ifab/core/angles.h"
 #include "ifab/core/data_path.h"
 #include "ifab/core/random.h"
@@ -54,7 +55,7 @@ nlohmann::json Run(const RunContext& ctx) {
   const sim::World world(floor_only);
   RandomStream rng(ctx.seed);
 
-  std::ofstream csv(std::filesystem::path(ctx.out_dir) / "lrf_bias_points.csv");
+  AtomicOfstream csv(std::filesystem::path(ctx.out_dir) / "lrf_bias_points.csv");
   csv << "height_m,scan,beam,angle_from_vertical_deg,x_m,z_m\n";
   nlohmann::json bumps = nlohmann::json::array();
   for (const double h : heights) {

@@ -13,6 +13,7 @@
 #include <fstream>
 #include <memory>
 
+#include "ifab/experiments/atomic_file.h"
 #include "ifab/arm/primitives.h"
 #include "ifab/core/angles.h"
 #include "ifab/core/config.h"
@@ -51,6 +52,7 @@ struct Setup {
 Setup ReadSetup(const ConfigNode& c) {
   Setup s;
   const ConfigNode robot_yaml = ConfigNode::LoadFile(Relative(c, "robot_yaml"));
+  robot_yaml.ExpectKeys({"feeder_in_base", "sim"});
   s.sim = sim::SimOptions::FromConfig(robot_yaml["sim"]);
   if (auto b = c.Find("range_bias")) {
     const bool bias = b->As<bool>();
@@ -197,7 +199,7 @@ json RunRegistrationConsistency(const RunContext& ctx) {
 
   std::vector<std::array<double, 6>> poses;
   json scans = json::array();
-  std::ofstream csv(fs::path(ctx.out_dir) / "registration_scans.csv");
+  AtomicOfstream csv(fs::path(ctx.out_dir) / "registration_scans.csv");
   csv << "scan,joint,points,brick_inliers,x_m,y_m,z_m,roll_deg,pitch_deg,yaw_deg,status\n";
   for (std::size_t k = 0; k < sweeps.size(); ++k) {
     for (int pass = 0; pass < passes; ++pass) {
@@ -318,7 +320,7 @@ json RunCalibrationConsistency(const RunContext& ctx) {
   std::vector<std::array<double, 6>> calibrations;
   double worst_trial_std_mm = 0.0, worst_trial_std_deg = 0.0;
   json sets = json::array();
-  std::ofstream csv(fs::path(ctx.out_dir) / "calibration_datasets.csv");
+  AtomicOfstream csv(fs::path(ctx.out_dir) / "calibration_datasets.csv");
   csv << "dataset,cube_x_m,cube_y_m,points,x_mm,y_mm,z_mm,roll_deg,pitch_deg,yaw_deg,trial_std_mm_max,trial_std_deg_max\n";
   for (std::size_t d = 0; d < ds.size(); ++d) {
     const auto cb = ds[d].AsNumbers(3);  // cube x y [m], yaw [deg] in base (design placement)

@@ -13,6 +13,7 @@ const std::vector<ExperimentInfo>& Registry() {
       BasePlanningExperiment(),
       RegistrationConsistencyExperiment(),
       CalibrationConsistencyExperiment(),
+      FaultsExperiment(),
   };
   return registry;
 }

@@ -4,6 +4,8 @@
 /// so would a driver for the real machine; no algorithm can tell which one it talks to.
 /// Sensor data is drained: each Take* call returns what arrived since the previous call.
 
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "ifab/msgs/msgs.h"
@@ -28,6 +30,11 @@ class Robot {
   virtual void SendJointTrajectory(const JointTrajectory& trajectory) = 0;
   /// True while the arm controller is still executing a trajectory.
   virtual bool ArmBusy() const = 0;
+  /// Why the arm controller refused the last trajectory sent (it is then not executed); empty
+  /// if it accepted it. A driver that cannot tell returns empty.
+  virtual std::string ArmRejection() const { return {}; }
+  /// The vacuum gripper's sensor: whether it holds something; nullopt if it has no sensor.
+  virtual std::optional<bool> VacuumHolding() const { return std::nullopt; }
   /// Vacuum gripper on (grip) or off (release).
   virtual void SetGripper(bool grip) = 0;
 

@@ -4,6 +4,8 @@
 #include <kdl/chainfksolverpos_recursive.hpp>
 #include <urdf_parser/urdf_parser.h>
 
+#include <Eigen/Eigenvalues>
+#include <cmath>
 #include <fstream>
 #include <mutex>
 #include <sstream>
@@ -49,6 +51,53 @@ KDL::RigidBodyInertia ToKdlInertia(const urdf::Inertial& i) {
       i.mass, origin.p, KDL::RotationalInertia(i.ixx, i.iyy, i.izz, i.ixy, i.ixz, i.iyz));
   // Inertia axes given in the inertial frame: rotate them into the link frame.
   return origin.M * about_cog;
+}
+
+bool Finite(const urdf::Vector3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+// Finite, and within a kilometre: urdfdom accepts 1e308, which overflows forward kinematics.
+bool Finite(const urdf::Pose& p) {
+  const auto& v = p.position;
+  return Finite(v) && std::abs(v.x) <= 1e3 && std::abs(v.y) <= 1e3 && std::abs(v.z) <= 1e3 &&
+         std::isfinite(p.rotation.x) && std::isfinite(p.rotation.y) && std::isfinite(p.rotation.z) &&
+         std::isfinite(p.rotation.w);
+}
+
+// What the dynamics (arm/dynamics.h, KDL) rely on: finite origins and axes, and for each link
+// with an <inertial> a positive mass and a positive-definite inertia that a real body can have
+// (principal moments obey the triangle inequality). urdfdom accepts nan, inf and negative masses.
+void CheckPhysical(const urdf::ModelInterface& m, const std::string& path) {
+  for (const auto& [name, link] : m.links_) {
+    if (!link->inertial) continue;
+    const urdf::Inertial& i = *link->inertial;
+    if (!(std::isfinite(i.mass) && i.mass > 0))
+      ThrowInputError("{}: link '{}': inertial mass: expected a positive number [kg], got {}", path, name, i.mass);
+    if (!Finite(i.origin))
+      ThrowInputError("{}: link '{}': inertial origin: expected finite xyz (within 1 km) and rpy", path, name);
+    Eigen::Matrix3d I;
+    I << i.ixx, i.ixy, i.ixz, i.ixy, i.iyy, i.iyz, i.ixz, i.iyz, i.izz;
+    const bool finite = I.allFinite();
+    const Eigen::Vector3d e = finite ? Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(I).eigenvalues()
+                                     : Eigen::Vector3d::Zero();
+    // Relative slack for rounding of inertias written to a few digits.
+    const double slack = 1e-9 * e.cwiseAbs().maxCoeff();
+    if (!finite || !(e.minCoeff() > 0) || !(e[0] + e[1] >= e[2] - slack))
+      ThrowInputError("{}: link '{}': inertia: expected a finite, positive-definite matrix whose principal "
+                      "moments obey a + b >= c, got ixx={} iyy={} izz={} ixy={} ixz={} iyz={}",
+                      path, name, i.ixx, i.iyy, i.izz, i.ixy, i.ixz, i.iyz);
+  }
+  for (const auto& [name, joint] : m.joints_) {
+    if (!Finite(joint->parent_to_joint_origin_transform))
+      ThrowInputError("{}: joint '{}': origin: expected finite xyz (within 1 km) and rpy", path, name);
+    const bool moves = joint->type != urdf::Joint::FIXED && joint->type != urdf::Joint::FLOATING &&
+                       joint->type != urdf::Joint::PLANAR;
+    const double axis_norm = std::sqrt(joint->axis.x * joint->axis.x + joint->axis.y * joint->axis.y +
+                                       joint->axis.z * joint->axis.z);
+    if (moves && !(std::isfinite(axis_norm) && axis_norm > 1e-9))
+      ThrowInputError("{}: joint '{}': axis: expected a finite non-zero vector", path, name);
+    if (joint->limits && !(std::isfinite(joint->limits->velocity) && std::isfinite(joint->limits->effort) &&
+                           !std::isnan(joint->limits->lower) && !std::isnan(joint->limits->upper)))
+      ThrowInputError("{}: joint '{}': limit: expected numbers (finite velocity and effort)", path, name);
+  }
 }
 
 void AddChildren(const urdf::LinkConstSharedPtr& link, KDL::Tree& tree) {
@@ -98,14 +147,17 @@ RobotModel LoadRobotModel(const std::string& urdf_path) {
   if (!in) ThrowInputError("{}: cannot open the file", urdf_path);
   std::stringstream ss;
   ss << in.rdbuf();
+  return ParseRobotModel(ss.str(), urdf_path);
+}
 
+RobotModel ParseRobotModel(const std::string& urdf_text, const std::string& urdf_path) {
   urdf::ModelInterfaceSharedPtr urdf_model;
   {
     static std::mutex mutex;  // console_bridge's handler is process-global
     std::lock_guard<std::mutex> lock(mutex);
     CollectingHandler handler;
     console_bridge::useOutputHandler(&handler);
-    urdf_model = urdf::parseURDF(ss.str());
+    urdf_model = urdf::parseURDF(urdf_text);
     console_bridge::restorePreviousOutputHandler();
     if (!urdf_model) {
       ThrowInputError("{}: not a valid URDF: {}", urdf_path,
@@ -117,6 +169,7 @@ RobotModel LoadRobotModel(const std::string& urdf_path) {
   model.urdf_path = urdf_path;
   const auto root = urdf_model->getRoot();
   if (!root) ThrowInputError("{}: the URDF has no root link", urdf_path);
+  CheckPhysical(*urdf_model, urdf_path);
   model.tree = KDL::Tree(root->name);
   AddChildren(root, model.tree);
 

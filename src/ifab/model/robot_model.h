@@ -42,6 +42,8 @@ struct RobotModel {
 /// Read a URDF. Throws InputError naming the file and what is wrong (unparsable XML, a missing
 /// link or joint, a chain that is not six revolute joints, missing limits).
 RobotModel LoadRobotModel(const std::string& urdf_path);
+/// The same from URDF text; `name` stands for the file in messages.
+RobotModel ParseRobotModel(const std::string& urdf_text, const std::string& name);
 
 /// Override mounts from a robot YAML section `mounts:` with keys base_laser, arm_laser,
 /// arm_base, gripper, each `[x, y, z, roll, pitch, yaw]`.

@@ -159,6 +159,40 @@ double SignedArea(const std::vector<Eigen::Vector2d>& poly) {
   return 0.5 * a;
 }
 
+// Whether segments ab and cd share a point (touching counts).
+bool SegmentsMeet(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c,
+                  const Eigen::Vector2d& d) {
+  const auto cross = [](const Eigen::Vector2d& o, const Eigen::Vector2d& p, const Eigen::Vector2d& q) {
+    const double v = (p - o).x() * (q - o).y() - (p - o).y() * (q - o).x();
+    return (v > 0) - (v < 0);
+  };
+  const auto within = [](const Eigen::Vector2d& p, const Eigen::Vector2d& q, const Eigen::Vector2d& r) {
+    return std::min(p.x(), q.x()) <= r.x() && r.x() <= std::max(p.x(), q.x()) && std::min(p.y(), q.y()) <= r.y() &&
+           r.y() <= std::max(p.y(), q.y());
+  };
+  const int d1 = cross(c, d, a), d2 = cross(c, d, b), d3 = cross(a, b, c), d4 = cross(a, b, d);
+  if (d1 * d2 < 0 && d3 * d4 < 0) return true;
+  return (d1 == 0 && within(c, d, a)) || (d2 == 0 && within(c, d, b)) || (d3 == 0 && within(a, b, c)) ||
+         (d4 == 0 && within(a, b, d));
+}
+
+// The boundary must be a simple polygon: a repeated point would give a zero-length wall (whose
+// direction normalises to NaN), crossing edges no inside at all.
+void CheckSimplePolygon(const ConfigNode& boundary, const std::vector<Eigen::Vector2d>& poly) {
+  const std::size_t n = poly.size();
+  for (std::size_t i = 1; i < n; ++i)
+    if ((poly[i] - poly[i - 1]).norm() < 1e-9)
+      boundary[i].Fail(fmt::format("a point different from boundary[{}] (no repeated points)", i - 1));
+  if ((poly[n - 1] - poly[0]).norm() < 1e-9)
+    boundary[n - 1].Fail("a point different from boundary[0] (the polygon closes by itself)");
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = i + 2; j < n; ++j) {
+      if (i == 0 && j == n - 1) continue;  // adjacent through the closing edge
+      if (SegmentsMeet(poly[i], poly[(i + 1) % n], poly[j], poly[(j + 1) % n]))
+        boundary.Fail(fmt::format("a simple polygon (edges {}-{} and {}-{} cross)", i, (i + 1) % n, j, (j + 1) % n));
+    }
+}
+
 }  // namespace
 
 Site SiteFromConfig(const ConfigNode& c) {
@@ -179,6 +213,7 @@ Site SiteFromConfig(const ConfigNode& c) {
     const auto v = boundary[i].AsNumbers(2);
     site.boundary.emplace_back(v[0], v[1]);
   }
+  CheckSimplePolygon(boundary, site.boundary);
   const double area = SignedArea(site.boundary);
   if (std::abs(area) < 1e-6) boundary.Fail("a polygon with non-zero area");
   if (area < 0) std::reverse(site.boundary.begin(), site.boundary.end());

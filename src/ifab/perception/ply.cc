@@ -2,7 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <bit>
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -90,6 +92,7 @@ class BodyReader {
   }
 
   void SetWhere(std::string where) { where_ = std::move(where); }
+  const std::string& where() const { return where_; }
 
  private:
   std::istream& in_;
@@ -140,9 +143,11 @@ PointCloud ReadPly(std::istream& in, const std::string& name) {
       std::string count;
       words >> e.name >> count;
       char* end = nullptr;
+      errno = 0;
       const long long c = std::strtoll(count.c_str(), &end, 10);
-      if (e.name.empty() || count.empty() || *end != '\0' || c < 0)
-        ThrowInputError("{}: line {}: expected 'element <name> <count>' with a count >= 0, got '{}'", name, line_no, line);
+      if (e.name.empty() || count.empty() || *end != '\0' || c < 0 || errno == ERANGE)
+        ThrowInputError("{}: line {}: expected 'element <name> <count>' with a count >= 0 (at most {}), got '{}'",
+                        name, line_no, std::numeric_limits<long long>::max(), line);
       e.count = static_cast<std::uint64_t>(c);
       elements.push_back(e);
     } else if (keyword == "property") {
@@ -172,17 +177,32 @@ PointCloud ReadPly(std::istream& in, const std::string& name) {
   }
   if (!ended) ThrowInputError("{}: the header has no 'end_header'", name);
   if (!format) ThrowInputError("{}: the header has no 'format' line", name);
+  // An instance without properties takes no bytes: a huge count of them would loop for ever.
+  for (const auto& e : elements)
+    if (e.properties.empty() && e.count > 0)
+      ThrowInputError("{}: element '{}' declares {} instances but no properties", name, e.name, e.count);
 
   PointCloud cloud;
   BodyReader body(in, *format, name);
+  // A list's length: a whole number in its count type's range (a cast from a negative, fractional
+  // or NaN value would be undefined); nullopt at the end of the data.
+  auto read_list_count = [&](const Property& p) -> std::optional<std::uint64_t> {
+    const auto c = body.Read(p.count_type);
+    if (!c) return std::nullopt;
+    const double max_count = std::ldexp(1.0, 8 * static_cast<int>(SizeOf(p.count_type)));
+    if (!(*c >= 0.0 && *c < max_count && std::floor(*c) == *c))
+      ThrowInputError("{}: list '{}' has length {}, expected a whole number from 0 to {}{}", name, p.name, *c,
+                      max_count - 1, body.where());
+    return static_cast<std::uint64_t>(*c);
+  };
   auto skip_instance = [&](const Element& e, std::uint64_t index) {
     for (const auto& p : e.properties) {
       body.SetWhere(fmt::format(" ({} {}, property {})", e.name, index, p.name));
       std::uint64_t n = 1;
       if (p.is_list) {
-        const auto c = body.Read(p.count_type);
+        const auto c = read_list_count(p);
         if (!c) return false;
-        n = static_cast<std::uint64_t>(*c);
+        n = *c;
       }
       for (std::uint64_t k = 0; k < n; ++k)
         if (!body.Read(p.type)) return false;
@@ -212,22 +232,28 @@ PointCloud ReadPly(std::istream& in, const std::string& name) {
     }
     if (ix < 0 || iy < 0 || iz < 0) ThrowInputError("{}: element 'vertex' needs scalar properties x, y and z", name);
     if (e.count > 200'000'000) ThrowInputError("{}: {} vertices is more than this reader accepts", name, e.count);
-    cloud.points.reserve(e.count);
-    for (auto& f : cloud.fields) f.values.reserve(e.count);
+    // Reserve no more than a modest block up front: the count is the file's claim, not its size,
+    // and a 100-byte file must not be able to ask for gigabytes.
+    const std::size_t reserve = static_cast<std::size_t>(std::min<std::uint64_t>(e.count, 1u << 16));
+    cloud.points.reserve(reserve);
+    for (auto& f : cloud.fields) f.values.reserve(reserve);
     std::vector<double> values(e.properties.size());
     for (std::uint64_t i = 0; i < e.count; ++i) {
       for (std::size_t k = 0; k < e.properties.size(); ++k) {
         const Property& p = e.properties[k];
         body.SetWhere(fmt::format(" (vertex {}, property {})", i, p.name));
         if (p.is_list) {
-          const auto c = body.Read(p.count_type);
+          const auto c = read_list_count(p);
           bool ok = c.has_value();
-          for (std::uint64_t j = 0; ok && j < static_cast<std::uint64_t>(*c); ++j) ok = body.Read(p.type).has_value();
+          for (std::uint64_t j = 0; ok && j < *c; ++j) ok = body.Read(p.type).has_value();
           if (!ok) ThrowInputError("{}: the header declares {} vertices, the data ends at vertex {}", name, e.count, i);
           continue;
         }
         const auto v = body.Read(p.type);
         if (!v) ThrowInputError("{}: the header declares {} vertices, the data ends at vertex {}", name, e.count, i);
+        // NaN or infinity is no measurement; downstream solvers would carry it into every sum.
+        if (!std::isfinite(*v))
+          ThrowInputError("{}: vertex {}, property {}: expected a finite number, got {}", name, i, p.name, *v);
         values[k] = *v;
       }
       cloud.points.emplace_back(values[static_cast<std::size_t>(ix)], values[static_cast<std::size_t>(iy)],

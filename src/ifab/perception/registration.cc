@@ -4,7 +4,9 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <algorithm>
 #include <cmath>
+#include <iterator>
 
 #include "ifab/core/config.h"
 #include "ifab/perception/pose_solver.h"
@@ -130,7 +132,16 @@ RegistrationSummary Register(const std::vector<RayPoint>& cloud, const std::vect
   const auto t_start = std::chrono::steady_clock::now();
   internal::PoseProblemInput input;
   input.cloud = &cloud;
+  // A non-finite point (from a broken file or driver) would poison every sum: leave it out.
+  std::vector<RayPoint> finite;
+  const auto is_finite = [](const RayPoint& q) { return q.p.allFinite() && q.origin.allFinite(); };
+  if (!std::all_of(cloud.begin(), cloud.end(), is_finite)) {
+    std::copy_if(cloud.begin(), cloud.end(), std::back_inserter(finite), is_finite);
+    input.cloud = &finite;
+  }
   RegistrationSummary best = internal::SolvePoseProblem(input, bodies, options).summary;
+  if (input.cloud == &finite)
+    best.warnings.push_back(fmt::format("{} non-finite points left out", cloud.size() - finite.size()));
   // Restarts: points near silhouettes switch sides and the alternation can settle in a nearby
   // local minimum along a weakly constrained direction. Start again from the result moved both
   // ways along each body's weakest directions; keep the lowest cost.

@@ -4,7 +4,9 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <cstdint>
 #include <fstream>
+#include <istream>
 
 #include "ifab/core/error.h"
 #include "ifab/sync/clock_sync.h"
@@ -27,8 +29,24 @@ class Reader {
   }
   double Number(const json& j, const std::string& where, const char* key) const {
     const json& v = Field(j, where, key);
-    if (!v.is_number()) Fail(where + "." + key, "a number");
+    if (!v.is_number() || !std::isfinite(v.get<double>())) Fail(where + "." + key, "a finite number");
     return v.get<double>();
+  }
+  // A packet counter: a whole number from 0 to 2^53 (a cast of a negative, fractional or huge
+  // double to uint64 would be undefined or silently wrong).
+  std::uint64_t Sequence(const json& j, const std::string& where) const {
+    const json& v = Field(j, where, "sequence");
+    if (v.is_number_unsigned()) return v.get<std::uint64_t>();
+    const double d = v.is_number() ? v.get<double>() : -1.0;
+    if (!(d >= 0.0 && d <= 9007199254740992.0 && std::floor(d) == d))
+      Fail(where + ".sequence", "a whole number >= 0");
+    return static_cast<std::uint64_t>(d);
+  }
+  std::string String(const json& j, const char* key, const std::string& fallback) const {
+    auto it = j.find(key);
+    if (it == j.end()) return fallback;
+    if (!it->is_string()) Fail(key, "a string");
+    return it->get<std::string>();
   }
   const json& Array(const json& j, const std::string& where, const char* key) const {
     const json& v = Field(j, where, key);
@@ -67,6 +85,10 @@ const char* DeviceKey(DeviceId id) {
 SweepRecording LoadSweep(const std::string& path) {
   std::ifstream in(path);
   if (!in) ThrowInputError("{}: cannot open for reading", path);
+  return ParseSweep(in, path);
+}
+
+SweepRecording ParseSweep(std::istream& in, const std::string& path) {
   json j;
   try {
     j = json::parse(in);
@@ -74,11 +96,11 @@ SweepRecording LoadSweep(const std::string& path) {
     ThrowInputError("{}: not valid JSON: {}", path, e.what());
   }
   const Reader r(path);
-  if (!j.is_object() || j.value("format", "") != "ifab-sweep")
+  if (!j.is_object() || !j.contains("format") || j["format"] != "ifab-sweep")
     ThrowInputError("{}: not an ifab sweep file (expected \"format\": \"ifab-sweep\")", path);
-  if (j.value("version", 0) != 1) ThrowInputError("{}: version: expected 1", path);
+  if (!j.contains("version") || j["version"] != 1) ThrowInputError("{}: version: expected 1", path);
   SweepRecording s;
-  s.name = j.value("name", path);
+  s.name = r.String(j, "name", path);
   const bool raw = j.contains("sync_pulses");
 
   const json& scans = r.Array(j, "sweep", "scans");
@@ -88,7 +110,7 @@ SweepRecording LoadSweep(const std::string& path) {
     LaserScan scan;
     if (raw) {
       scan.stamp.t_device = r.Number(e, where, "t_device");
-      scan.stamp.sequence = static_cast<std::uint64_t>(r.Number(e, where, "sequence"));
+      scan.stamp.sequence = r.Sequence(e, where);
     } else {
       scan.stamp.t = r.Number(e, where, "t");
     }
@@ -99,12 +121,16 @@ SweepRecording LoadSweep(const std::string& path) {
     scan.range_max = r.Number(e, where, "range_max");
     if (!(scan.angle_increment > 0)) r.Fail(where + ".angle_increment", "a positive number");
     if (!(scan.time_increment >= 0)) r.Fail(where + ".time_increment", "a number >= 0");
+    if (!(scan.range_min >= 0)) r.Fail(where + ".range_min", "a number >= 0");
+    if (!(scan.range_min < scan.range_max)) r.Fail(where + ".range_max", "a number > range_min");
     const json& ranges = r.Array(e, where, "ranges");
     scan.ranges.reserve(ranges.size());
     for (std::size_t k = 0; k < ranges.size(); ++k) {
+      // A beam without a return is null; every other range is a distance (finite, >= 0).
       if (ranges[k].is_null()) scan.ranges.push_back(LaserScan::kNoReturn);
-      else if (ranges[k].is_number()) scan.ranges.push_back(ranges[k].get<double>());
-      else r.Fail(fmt::format("{}.ranges[{}]", where, k), "a number or null");
+      else if (ranges[k].is_number() && std::isfinite(ranges[k].get<double>()) && ranges[k].get<double>() >= 0)
+        scan.ranges.push_back(ranges[k].get<double>());
+      else r.Fail(fmt::format("{}.ranges[{}]", where, k), "a distance >= 0 [m] or null");
     }
     s.scans.push_back(std::move(scan));
   }
@@ -115,7 +141,7 @@ SweepRecording LoadSweep(const std::string& path) {
     JointState js;
     if (raw) {
       js.stamp.t_device = r.Number(e, where, "t_device");
-      js.stamp.sequence = static_cast<std::uint64_t>(r.Number(e, where, "sequence"));
+      js.stamp.sequence = r.Sequence(e, where);
     } else {
       js.stamp.t = r.Number(e, where, "t");
     }
@@ -128,6 +154,16 @@ SweepRecording LoadSweep(const std::string& path) {
     s.joint_states.push_back(js);
   }
   if (s.joint_states.size() < 2) ThrowInputError("{}: joint_states: expected at least 2 samples", path);
+  // Scans and joint states are interpolated in time: their stamps must increase.
+  const auto stamp_of = [&](const Stamp& st) { return raw ? st.t_device : st.t; };
+  const char* stamp_key = raw ? "t_device" : "t";
+  for (std::size_t i = 1; i < s.scans.size(); ++i)
+    if (!(stamp_of(s.scans[i].stamp) > stamp_of(s.scans[i - 1].stamp)))
+      r.Fail(fmt::format("scans[{}].{}", i, stamp_key), fmt::format("a time after scans[{}]'s (stamps in time order)", i - 1));
+  for (std::size_t i = 1; i < s.joint_states.size(); ++i)
+    if (!(stamp_of(s.joint_states[i].stamp) > stamp_of(s.joint_states[i - 1].stamp)))
+      r.Fail(fmt::format("joint_states[{}].{}", i, stamp_key),
+             fmt::format("a time after joint_states[{}]'s (stamps in time order)", i - 1));
 
   if (raw) {
     const json& pulses = r.Array(j, "sweep", "sync_pulses");
@@ -136,7 +172,7 @@ SweepRecording LoadSweep(const std::string& path) {
       const std::string where = fmt::format("sync_pulses[{}]", i);
       SyncPulse p;
       p.device = ParseDevice(r, pulses[i], where);
-      p.sequence = static_cast<std::uint64_t>(r.Number(pulses[i], where, "sequence"));
+      p.sequence = r.Sequence(pulses[i], where);
       p.t_host = r.Number(pulses[i], where, "t_host");
       s.sync_pulses.push_back(p);
       if (p.device == DeviceId::kArmLaser) laser_sync.AddPulse(p);

@@ -23,6 +23,7 @@
 ///     "sync_pulses": [{"device": "arm_laser" | "arm", "sequence": 17, "t_host": 12.49}, ...]
 /// and the loader maps device times to host time with the sync module (TICSync-style).
 
+#include <iosfwd>
 #include <string>
 #include <vector>
 
@@ -40,6 +41,8 @@ struct SweepRecording {
 /// Read a sweep file; host times are filled in (from the pulses if the file has raw stamps).
 /// Throws InputError naming the file and the field that is wrong.
 SweepRecording LoadSweep(const std::string& path);
+/// The same from a stream; `name` stands for the file in messages.
+SweepRecording ParseSweep(std::istream& in, const std::string& name);
 
 /// Write a sweep file (host times; pulses and device stamps too if `raw_stamps`).
 void SaveSweep(const std::string& path, const SweepRecording& sweep, bool raw_stamps = false);

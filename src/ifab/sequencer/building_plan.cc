@@ -1,5 +1,7 @@
 #include "ifab/sequencer/building_plan.h"
 
+#include <cmath>
+
 #include "ifab/core/angles.h"
 #include "ifab/core/config.h"
 
@@ -25,15 +27,15 @@ BuildingPlan BuildingPlan::FromConfig(const ConfigNode& c) {
                               Pose2(v[0], v[1], WrapAngle(DegToRad(v[2])))});
   }
   int bricks = 0;
-  c.ReadPositive("bricks", bricks);
+  c.ReadPositive("bricks", bricks, kMaxBricks);
   if (bricks == 0) c["bricks"].Fail("a positive number of bricks");
   std::vector<int> order;
   if (auto o = c.Find("order")) {
     for (double x : o->AsNumbers()) {
-      const int k = static_cast<int>(x);
-      if (k != x || k < 0 || k >= static_cast<int>(plan.positions.size()))
+      // Range first: casting a double outside int's range is undefined.
+      if (!(x >= 0 && x < static_cast<double>(plan.positions.size()) && std::floor(x) == x))
         o->Fail(fmt::format("position indices in [0, {}]", plan.positions.size() - 1));
-      order.push_back(k);
+      order.push_back(static_cast<int>(x));
     }
     if (order.empty()) o->Fail("a non-empty list of position indices");
   } else {

@@ -20,6 +20,8 @@ struct BuildingPosition {
 };
 
 struct BuildingPlan {
+  /// More bricks than any stack a site holds (the paper's: 26); a bound against typos.
+  static constexpr int kMaxBricks = 10'000;
   std::vector<BuildingPosition> positions;
   /// One visit per entry: the position index and how many bricks to place there. The first
   /// visit is where the robot starts (no repositioning before it).

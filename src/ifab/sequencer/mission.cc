@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <algorithm>
+#include <limits>
 #include <optional>
 
 #include "ifab/core/angles.h"
@@ -27,7 +28,10 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
                 "max_localization_jump_m", "scan_distance", "scan_elevation_deg", "sweep_half_angle_deg",
                 "sweep_speed_deg_s", "crop_radius", "park_joints_deg", "localize", "place_bricks", "max_reapproaches",
                 "reapproach_tolerance", "reapproach_distance", "reapproach_speed", "tilt_compensation", "tilt_settle",
-                "tilt_window", "attitude_prior_deg", "height_prior_m"});
+                "tilt_window", "attitude_prior_deg", "height_prior_m", "max_scan_gap",
+                "sensor_wait_timeout", "protective_field", "protective_field_points", "protective_field_margin",
+                "obstacle_wait_timeout", "max_stamp_lag", "max_gyro_rate_factor", "arm_retries", "pick_retries",
+                "drive_retries"});
   MissionOptions o;
   c.ReadPositive("control_period", o.control_period);
   c.ReadPositive("drive_timeout_factor", o.drive_timeout_factor);
@@ -35,7 +39,7 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
   c.ReadNonNegative("settle_time", o.settle_time);
   c.ReadPositive("plan_attempts", o.plan_attempts);
   c.ReadPositive("max_sweeps", o.max_sweeps);
-  c.ReadNonNegative("min_inliers", o.min_inliers);
+  c.ReadNonNegative("min_inliers", o.min_inliers, std::numeric_limits<int>::max());  // a threshold, sizes nothing
   c.ReadPositive("max_localization_std_m", o.max_localization_std_m);
   c.ReadPositive("max_localization_std_deg", o.max_localization_std_deg);
   c.ReadPositive("max_localization_jump_m", o.max_localization_jump_m);
@@ -50,6 +54,17 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
   c.ReadPositive("reapproach_tolerance", o.reapproach_tolerance);
   c.ReadPositive("reapproach_distance", o.reapproach_distance);
   c.ReadPositive("reapproach_speed", o.reapproach_speed);
+  c.ReadPositive("max_scan_gap", o.max_scan_gap);
+  c.ReadPositive("sensor_wait_timeout", o.sensor_wait_timeout);
+  c.ReadNonNegative("protective_field", o.protective_field);
+  c.ReadPositive("protective_field_points", o.protective_field_points);
+  c.ReadNonNegative("protective_field_margin", o.protective_field_margin);
+  c.ReadPositive("obstacle_wait_timeout", o.obstacle_wait_timeout);
+  c.ReadPositive("max_stamp_lag", o.max_stamp_lag);
+  c.ReadPositive("max_gyro_rate_factor", o.max_gyro_rate_factor);
+  c.ReadNonNegative("arm_retries", o.arm_retries, 10);
+  c.ReadNonNegative("pick_retries", o.pick_retries, 10);
+  c.ReadNonNegative("drive_retries", o.drive_retries, 10);
   if (auto q = c.Find("park_joints_deg")) {
     const auto v = q->AsNumbers(6);
     for (int i = 0; i < 6; ++i) o.q_park[i] = DegToRad(v[static_cast<std::size_t>(i)]);
@@ -82,6 +97,15 @@ Mission::Mission(hal::Robot& robot, MissionComponents components, MissionOptions
   estimator_ = std::make_unique<base::BaseStateEstimator>(c_.estimator, Pose2Of(T));
   arm_ = std::make_unique<arm::ArmPrimitives>(c_.robot, c_.arm);
   workpiece_.bricks.clear();
+  // The fastest turn the tracks allow (one forward, one back at full speed); a gyro reading far
+  // beyond it is a shock or a glitch, not motion.
+  const auto& g = c_.base_geometry;
+  max_gyro_rate_ = o_.max_gyro_rate_factor * 2.0 * g.max_track_speed / std::max(1e-3, g.track_gauge);
+}
+
+void Mission::Note(const std::string& kind, const std::string& what) {
+  incidents_.push_back({robot_.Now(), kind, what});
+  spdlog::warn("{}: {}", kind, what);
 }
 
 Mission::~Mission() = default;
@@ -100,6 +124,7 @@ void Mission::Start(const Pose2& T_site_base, const Vector6d& q) {
   estimating_ = false;  // standing at the start; estimation begins with the first drive
   q_ = q;
   last_scan_mid_ = robot_.Now();
+  last_base_scan_arrival_ = robot_.Now();
   estimator_->Reset(T_site_base, last_scan_mid_);
   robot_.SetLaserActive(DeviceId::kArmLaser, false);
   T_site_base_ref_ = Pose3Of(T_site_base);  // given, not measured: the reference until the first scan
@@ -124,21 +149,63 @@ void Mission::PumpSensors() {
   std::vector<LaserScan> arm_in = robot_.TakeLaserScans(DeviceId::kArmLaser);
   std::vector<JointState> joints_in = robot_.TakeJointStates();
   std::vector<AccelSample> accel_in = robot_.TakeAccelSamples();
+  if (!base_in.empty()) {
+    // The newest scan's points in the base frame (design mount), for the protective field.
+    const LaserScan& s = base_in.back();
+    const Pose3& T = c_.robot.T_base_base_laser;
+    last_scan_points_.clear();
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      const double r = s.ranges[i];
+      if (!std::isfinite(r) || r < s.range_min || r > s.range_max) continue;
+      const double a = s.angle_min + static_cast<double>(i) * s.angle_increment;
+      const Eigen::Vector3d p = T * Eigen::Vector3d(r * std::cos(a), r * std::sin(a), 0.0);
+      last_scan_points_.emplace_back(p.x(), p.y());
+    }
+  }
+  // A device whose synced stamps land far from their arrival time has a broken clock mapping
+  // (e.g. its clock jumped): forget its sync and learn it again from the next pulses.
+  auto check_clock = [&](DeviceClockSync& sync, auto& packets, const char* name) {
+    int off = 0;
+    for (const auto& p : packets) {
+      Stamp st = p.stamp;
+      if (sync.Apply(st) && std::abs(st.t - st.t_host_received) > o_.max_stamp_lag) ++off;
+    }
+    if (off == 0) return;
+    sync = DeviceClockSync(c_.clock_sync);
+    packets.clear();
+    Note("clock_sync_reset", fmt::format("{} packets of the {} synced more than {:.2f} s from their arrival; "
+                                         "re-syncing its clock", off, name, o_.max_stamp_lag));
+  };
   for (const auto& g : gyro_in) sync_gyro_.AddPacket(g.stamp);
   for (const auto& s : base_in) sync_base_laser_.AddPacket(s.stamp);
   for (const auto& s : arm_in) sync_arm_laser_.AddPacket(s.stamp);
   for (const auto& j : joints_in) sync_arm_.AddPacket(j.stamp);
+  check_clock(sync_gyro_, gyro_in, "gyro");
+  check_clock(sync_base_laser_, base_in, "base laser");
+  check_clock(sync_arm_laser_, arm_in, "arm laser");
+  check_clock(sync_arm_, joints_in, "arm");
   auto synced = [](const DeviceClockSync& sync, Stamp& stamp, Seconds& last) {
     if (!sync.Apply(stamp) || stamp.t <= last) return false;
     last = stamp.t;
     return true;
   };
   std::vector<GyroSample> gyro;
-  for (auto& g : gyro_in)
+  int spikes = 0;
+  for (auto& g : gyro_in) {
+    if (std::abs(g.rate.z()) > max_gyro_rate_) {
+      ++spikes;
+      continue;
+    }
     if (synced(sync_gyro_, g.stamp, last_gyro_)) gyro.push_back(g);
+  }
+  if (spikes > 0)
+    Note("gyro_spikes", fmt::format("{} gyro samples beyond {:.2f} rad/s (the tracks' fastest turn x {:.1f}) "
+                                    "left out", spikes, max_gyro_rate_, o_.max_gyro_rate_factor));
   std::vector<LaserScan> scans;
   for (auto& s : base_in)
     if (synced(sync_base_laser_, s.stamp, last_base_scan_)) scans.push_back(std::move(s));
+  // Silence is judged on scans the estimator can use (arrived and synced), not on raw packets.
+  if (!scans.empty()) last_base_scan_arrival_ = robot_.Now();
   for (auto& s : arm_in)
     if (synced(sync_arm_laser_, s.stamp, last_arm_scan_)) arm_scans_.push_back(std::move(s));
   for (auto& j : joints_in)
@@ -184,18 +251,53 @@ base::PlanningScene Mission::Scene() const {
 }
 
 bool Mission::RunArm(const arm::PrimitiveResult& steps, const std::string& what) {
+  bool lost = false;
+  if (RunArmSteps(steps, what, false, &lost)) return true;
+  if (lost && !stopped_) StopSafely(fmt::format("{}: the vacuum lost the brick", what));
+  return false;
+}
+
+bool Mission::RunArmSteps(const arm::PrimitiveResult& steps, const std::string& what, bool holding, bool* lost_grip) {
+  *lost_grip = false;
   if (!steps.ok) {
     StopSafely(fmt::format("{}: {}", what, steps.message));
     return false;
   }
-  const arm::ExecuteResult r = arm::ExecuteSteps(robot_, steps.steps);
-  PumpSensors();
-  if (!r.ok) {
+  // Where the arm is after the first n steps (the last trajectory's end point).
+  const auto q_after = [&](std::size_t n) {
+    Vector6d q = q_;
+    for (std::size_t i = 0; i < n && i < steps.steps.size(); ++i)
+      if (!steps.steps[i].trajectory.points.empty()) q = steps.steps[i].trajectory.points.back().q;
+    return q;
+  };
+  std::size_t next = 0;
+  for (int attempt = 0;; ++attempt) {
+    const std::vector<arm::ArmStep> rest(steps.steps.begin() + static_cast<std::ptrdiff_t>(next), steps.steps.end());
+    arm::ExecuteOptions eo;
+    eo.holding = holding;
+    const arm::ExecuteResult r = arm::ExecuteSteps(robot_, rest, eo);
+    PumpSensors();
+    for (std::size_t i = 0; i < static_cast<std::size_t>(r.steps_done); ++i)
+      if (rest[i].gripper != arm::GripperAction::kNone) holding = rest[i].gripper == arm::GripperAction::kGrip;
+    q_ = q_after(next + static_cast<std::size_t>(r.steps_done));
+    if (r.ok) {
+      q_ = steps.q_end;
+      return true;
+    }
+    if (r.lost_grip) {
+      *lost_grip = true;
+      return false;
+    }
+    // A refused trajectory did not move the arm: the same one is sent again from where it is.
+    if (r.rejected && attempt < o_.arm_retries) {
+      Note("arm_rejected", fmt::format("{}: {}; sending it again (retry {} of {})", what, r.message, attempt + 1,
+                                       o_.arm_retries));
+      next += static_cast<std::size_t>(r.steps_done);
+      continue;
+    }
     StopSafely(fmt::format("{}: {}", what, r.message));
     return false;
   }
-  q_ = steps.q_end;
-  return true;
 }
 
 void Mission::StopSafely(const std::string& why) {
@@ -204,7 +306,14 @@ void Mission::StopSafely(const std::string& why) {
     stopped_ = true;
     stop_reason_ = why;
     spdlog::warn("mission stopped: {}", why);
-    // Park the arm if it can be planned; keep the vacuum on so a held brick is not dropped.
+    Note("safe_stop", why);
+    // A held brick goes back onto the feeder first (a stopped robot holds nothing), then the arm
+    // parks. If either cannot be planned the vacuum stays on: a held brick is not dropped.
+    if (robot_.VacuumHolding() == true) {
+      const Pose3 T_site_base = Pose3Of(T_site_base_);
+      const auto back = arm_->PlaceBrick(q_, T_site_base, T_site_base * o_.T_base_feeder, c_.site.brick);
+      if (back.ok && arm::ExecuteSteps(robot_, back.steps, {.holding = true}).ok) q_ = back.q_end;
+    }
     const auto park = arm_->MoveToJoints(q_, o_.q_park);
     if (park.ok) arm::ExecuteSteps(robot_, park.steps);
   }
@@ -235,8 +344,17 @@ bool Mission::Reposition(const BuildingPosition& goal, VisitLog& log) {
   estimator_->Reset(T_site_base_, last_scan_mid_, /*keep_references=*/true);
   estimating_ = true;
   trace_ = &log.estimated;
+  known_.emplace(Scene(), c_.base_geometry);
   bool arrived = false;
   base::BaseControllerOutput u = Follow(log.plan.trajectory, &arrived);
+  // Timed out off the goal (a stalled or slipping track): plan from where it is and drive again.
+  for (int retry = 0; !arrived && !stopped_ && retry < o_.drive_retries; ++retry) {
+    const base::PlanResult again = planner.Plan(T_site_base_, goal.T_site_base, rng_.Derive(100u + static_cast<std::uint64_t>(retry)));
+    if (!again.IsUsable()) break;
+    Note("replan", fmt::format("{}: the maneuver timed out {:.1f} cm from the goal; planned again ({:.1f} m)", goal.name,
+                               100.0 * u.end_distance, again.trajectory.Length()));
+    u = Follow(again.trajectory, &arrived);
+  }
   // A tracked base cannot move sideways: an offset the tracking left at the end is driven out by
   // reversing along the goal's line and coming forward onto it (or forward first, if reversing
   // would hit something).
@@ -268,6 +386,12 @@ bool Mission::Reposition(const BuildingPosition& goal, VisitLog& log) {
       if (!arrived) break;
     }
   }
+  if (stopped_) {
+    trace_ = nullptr;
+    estimating_ = false;
+    log.failure = stop_reason_;
+    return false;
+  }
   robot_.CommandTracks({robot_.Now(), 0.0, 0.0});
   for (double t = 0; t < o_.settle_time; t += o_.control_period) {
     robot_.Wait(o_.control_period);
@@ -286,10 +410,10 @@ bool Mission::Reposition(const BuildingPosition& goal, VisitLog& log) {
 base::BaseControllerOutput Mission::Follow(const base::BaseTrajectory& trajectory, bool* arrived) {
   base::BaseTrajectoryController controller(c_.controller);
   controller.SetTrajectory(trajectory);
-  const Seconds deadline = robot_.Now() + o_.drive_timeout_factor * trajectory.duration + o_.drive_timeout_margin;
+  Seconds deadline = robot_.Now() + o_.drive_timeout_factor * trajectory.duration + o_.drive_timeout_margin;
   *arrived = false;
   base::BaseControllerOutput u;
-  while (robot_.Now() < deadline) {
+  while (robot_.Now() < deadline && !stopped_) {
     robot_.Wait(o_.control_period);
     PumpSensors();
     u = controller.Update(T_site_base_, robot_.Now());
@@ -298,11 +422,80 @@ base::BaseControllerOutput Mission::Follow(const base::BaseTrajectory& trajector
       break;
     }
     TrackCommand command = u.command;
+    // Never drive blind (a silent base laser leaves the pose stale) or into something the site
+    // model does not have (a person): stop, wait, go on where the controller left off.
+    Seconds held = 0.0;
+    if (!HoldWhileUnsafe(command.v_left + command.v_right, &held)) break;
+    if (held > 0.0) {
+      deadline += held;
+      continue;
+    }
     command.t = robot_.Now();
     robot_.CommandTracks(command);
   }
   robot_.CommandTracks({robot_.Now(), 0.0, 0.0});
   return u;
+}
+
+int Mission::PointsInProtectiveField(double direction) const {
+  if (o_.protective_field <= 0.0 || !known_) return 0;
+  const auto& g = c_.base_geometry;
+  const double half_l = 0.5 * g.length, half_w = 0.5 * g.width + 0.1;
+  const Pose2 T = T_site_base_;
+  int n = 0;
+  for (const Eigen::Vector2d& p : last_scan_points_) {
+    const Eigen::Vector2d q = p - g.footprint_offset;
+    const double ahead = direction >= 0 ? q.x() - half_l : -q.x() - half_l;
+    if (ahead < 0.0 || ahead > o_.protective_field || std::abs(q.y()) > half_w) continue;
+    // Explained by the site as known (walls, obstacles, the stack)?
+    if (known_->PointClearance(T * p) < o_.protective_field_margin) continue;
+    ++n;
+  }
+  return n;
+}
+
+bool Mission::HoldWhileUnsafe(double direction, Seconds* held) {
+  *held = 0.0;
+  const Seconds t0 = robot_.Now();
+  bool noted_silence = false, noted_block = false;
+  for (;;) {
+    const bool silent = robot_.Now() - last_base_scan_arrival_ > o_.max_scan_gap;
+    const bool blocked = !silent && std::abs(direction) > 1e-6 &&
+                         PointsInProtectiveField(direction) >= o_.protective_field_points;
+    if (!silent && !blocked) break;
+    if (*held == 0.0) robot_.CommandTracks({robot_.Now(), 0.0, 0.0});
+    if (silent && !noted_silence) {
+      Note("base_laser_silent", fmt::format("no base laser scan for {:.2f} s: stopped the base to wait for it",
+                                            robot_.Now() - last_base_scan_arrival_));
+      noted_silence = true;
+    }
+    if (blocked && !noted_block) {
+      Note("path_blocked", fmt::format("{} unknown points within {:.1f} m {} the base: stopped to wait for the path "
+                                       "to clear", PointsInProtectiveField(direction), o_.protective_field,
+                                       direction >= 0 ? "ahead of" : "behind"));
+      noted_block = true;
+    }
+    const double limit = silent ? o_.sensor_wait_timeout : o_.obstacle_wait_timeout;
+    if (robot_.Now() - t0 > limit) {
+      StopSafely(silent ? fmt::format("the base laser stayed silent for {:.0f} s", limit)
+                        : fmt::format("the path stayed blocked for {:.0f} s", limit));
+      return false;
+    }
+    robot_.Wait(o_.control_period);
+    PumpSensors();
+    *held = robot_.Now() - t0;
+  }
+  if (*held > 0.0) {
+    // Clear for a moment more (a person walking off), then go on.
+    for (double t = 0; t < 1.0; t += o_.control_period) {
+      robot_.Wait(o_.control_period);
+      PumpSensors();
+    }
+    *held = robot_.Now() - t0;
+    Note(noted_block ? "path_blocked" : "base_laser_silent",
+         fmt::format("resumed driving after {:.1f} s", *held));
+  }
+  return true;
 }
 
 bool Mission::Localize(VisitLog& log) {
@@ -411,6 +604,7 @@ bool Mission::Localize(VisitLog& log) {
                      std::sqrt(b.covariance(5, 5)), dirs);
       }
       log.failure = "registration not trusted: " + why;
+      if (sweep + 1 < o_.max_sweeps) Note("resweep", fmt::format("{}: {}; sweeping again", log.position, log.failure));
       continue;
     }
     log.failure.clear();
@@ -467,25 +661,46 @@ bool Mission::PlaceBrick(int k, VisitLog& log) {
   const Pose3 T_site_base = full_pose ? T_site_base_ref_ : Pose3Of(T_site_base_);
   const Pose3 T_site_feeder = T_site_base * o_.T_base_feeder;
   const Pose3 T_site_goal = workpiece_.DesignedBrickPose(k);
-  Progress(fmt::format("{}: picking brick {} from the feeder", log.position, k + 1));
-  if (!RunArm(arm_->PickBrick(q_, T_site_base, T_site_feeder, c_.site.brick), "pick brick")) return false;
-  Progress(fmt::format("{}: placing brick {}", log.position, k + 1));
-  if (o_.tilt_compensation == TiltCompensation::kImu) {
-    // Above the goal first (the arm out, the brick held: the base leans as it will when placing),
-    // then measure the tilt and plan the descent on the compensated pose.
-    arm::PrimitiveResult plan = arm_->PlaceBrick(q_, T_site_base, T_site_goal, c_.site.brick);
-    if (plan.ok && !plan.steps.empty() && !plan.steps.front().trajectory.points.empty()) {
-      arm::PrimitiveResult above;
-      above.steps.push_back(plan.steps.front());
-      above.q_end = plan.steps.front().trajectory.points.back().q;
-      if (!RunArm(above, "move above the brick goal")) return false;
-    } else if (!plan.ok) {
-      return RunArm(plan, "place brick");  // stops safely with the planner's message
+  // A brick the vacuum loses (a failed grip, a drop on the way) is replaced by the feeder's next
+  // one: pick again, up to pick_retries times.
+  for (int attempt = 0;; ++attempt) {
+    bool lost = false;
+    Progress(fmt::format("{}: picking brick {} from the feeder", log.position, k + 1));
+    if (RunArmSteps(arm_->PickBrick(q_, T_site_base, T_site_feeder, c_.site.brick), "pick brick", false, &lost)) {
+      Progress(fmt::format("{}: placing brick {}", log.position, k + 1));
+      bool placed = false;
+      if (o_.tilt_compensation == TiltCompensation::kImu) {
+        // Above the goal first (the arm out, the brick held: the base leans as it will when
+        // placing), then measure the tilt and plan the descent on the compensated pose.
+        const arm::PrimitiveResult plan = arm_->PlaceBrick(q_, T_site_base, T_site_goal, c_.site.brick);
+        if (!plan.ok) {
+          placed = RunArmSteps(plan, "place brick", true, &lost);  // stops safely with the planner's message
+        } else {
+          bool above_ok = true;
+          if (!plan.steps.empty() && !plan.steps.front().trajectory.points.empty()) {
+            arm::PrimitiveResult above;
+            above.steps.push_back(plan.steps.front());
+            above.q_end = plan.steps.front().trajectory.points.back().q;
+            above_ok = RunArmSteps(above, "move above the brick goal", true, &lost);
+          }
+          if (above_ok) {
+            const Pose3 T_site_base_now = PlacingPose(log);
+            placed = RunArmSteps(arm_->PlaceBrick(q_, T_site_base_now, T_site_goal, c_.site.brick), "place brick", true,
+                                 &lost);
+          }
+        }
+      } else {
+        placed = RunArmSteps(arm_->PlaceBrick(q_, T_site_base, T_site_goal, c_.site.brick), "place brick", true, &lost);
+      }
+      if (placed) break;
     }
-    const Pose3 T_site_base_now = PlacingPose(log);
-    if (!RunArm(arm_->PlaceBrick(q_, T_site_base_now, T_site_goal, c_.site.brick), "place brick")) return false;
-  } else if (!RunArm(arm_->PlaceBrick(q_, T_site_base, T_site_goal, c_.site.brick), "place brick")) {
-    return false;
+    if (!lost) return false;  // stopped safely inside
+    if (attempt >= o_.pick_retries) {
+      StopSafely(fmt::format("brick {}: the vacuum lost it {} times", k + 1, attempt + 1));
+      return false;
+    }
+    Note("brick_lost", fmt::format("brick {}: the vacuum sensor reports no brick; picking the feeder's next one "
+                                   "(retry {} of {})", k + 1, attempt + 1, o_.pick_retries));
   }
   workpiece_.bricks.push_back({fmt::format("brick_{}", k), T_site_goal, c_.site.brick});
   log.bricks_placed.push_back(k);

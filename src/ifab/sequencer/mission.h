@@ -63,6 +63,18 @@ struct MissionOptions {
   double reapproach_tolerance{0.015};  ///< [m] re-approach when the end is farther than this from the goal
   double reapproach_distance{0.4};   ///< [m] each leg of a re-approach
   double reapproach_speed{0.1};      ///< [m/s]
+  // Faults (issue 14): what the mission watches for and how long it waits before a safe stop.
+  double max_scan_gap{0.3};          ///< [s] stop driving when the base laser was silent this long (12 scans)
+  double sensor_wait_timeout{15.0};  ///< [s] ... and stop the mission when it stays silent this long
+  double protective_field{0.8};      ///< [m] stop when unknown points are this close ahead of the footprint (0: off)
+  int protective_field_points{5};    ///< ... and at least this many (a person at 1 m returns ~40)
+  double protective_field_margin{0.15};  ///< [m] points this close to a known object are the object
+  double obstacle_wait_timeout{30.0};    ///< [s] wait for a blocked path to clear, then stop
+  double max_stamp_lag{0.25};        ///< [s] a packet synced this far from its arrival time: reset the device's clock sync
+  double max_gyro_rate_factor{2.0};  ///< gyro samples beyond this times the tracks' fastest turn are spikes
+  int arm_retries{2};                ///< resend a trajectory the arm controller rejected
+  int pick_retries{2};               ///< pick again after the vacuum lost a brick
+  int drive_retries{1};              ///< plan and drive again when a maneuver timed out off the goal
   Vector6d q_park{Vector6d::Zero()}; ///< arm configuration while driving [rad]
   Pose3 T_base_feeder{Pose3::Identity()};  ///< where the on-board feeder presents a brick
   TiltCompensation tilt_compensation{TiltCompensation::kImu};  ///< `tilt_compensation: imu | registered | none`
@@ -91,6 +103,14 @@ struct MissionComponents {
   RegistrationOptions registration;
   ClockSyncOptions clock_sync;
   Pose3 T_tool0_arm_laser;           ///< the arm laser's mount (calibrated, or the design value)
+};
+
+/// Something the mission noticed and handled (a fault, issue 14), for the results.
+struct Incident {
+  Seconds t{0.0};
+  std::string kind;   ///< base_laser_silent, path_blocked, clock_sync_reset, gyro_spikes, arm_rejected,
+                      ///< brick_lost, resweep, replan, safe_stop
+  std::string what;   ///< what it saw and did
 };
 
 /// What happened at one visit, for the results and for Fig. 6.
@@ -136,6 +156,7 @@ class Mission {
   const Site& workpiece() const { return workpiece_; }
   bool stopped() const { return stopped_; }
   const std::string& stop_reason() const { return stop_reason_; }
+  const std::vector<Incident>& incidents() const { return incidents_; }
 
  private:
   bool Reposition(const BuildingPosition& goal, VisitLog& log);
@@ -150,6 +171,14 @@ class Mission {
   /// Drain the robot's sensor queues: clocks, gyro and base scans into the estimator.
   void PumpSensors();
   bool RunArm(const arm::PrimitiveResult& steps, const std::string& what);
+  /// Run arm steps, resending a trajectory the controller rejected; StopSafely on other failures
+  /// unless the vacuum lost the brick (then returns false with *lost_grip set, the arm where it stopped).
+  bool RunArmSteps(const arm::PrimitiveResult& steps, const std::string& what, bool holding, bool* lost_grip);
+  void Note(const std::string& kind, const std::string& what);
+  /// Unknown base laser points in the protective field ahead (direction > 0) or behind.
+  int PointsInProtectiveField(double direction) const;
+  /// Stop and wait while the base laser is silent or the path is blocked; false: gave up (stopped).
+  bool HoldWhileUnsafe(double direction, Seconds* held);
   base::PlanningScene Scene() const;
   Pose3 Pose3Of(const Pose2& p) const;
 
@@ -175,6 +204,11 @@ class Mission {
   bool stopped_{false};
   std::string stop_reason_;
   std::vector<Stamped<Pose2>>* trace_{nullptr};  // where PumpSensors logs estimates
+  std::vector<Incident> incidents_;
+  Seconds last_base_scan_arrival_{0.0};  // host time the base laser last sent anything
+  std::vector<Eigen::Vector2d> last_scan_points_;  // the newest base scan's points (base frame)
+  std::optional<base::FootprintChecker> known_;  // the scene as known, for the protective field
+  double max_gyro_rate_{0.0};
   bool estimating_{true};  // false while the base stands still for arm work: scans are not matched
 };
 

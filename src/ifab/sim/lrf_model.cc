@@ -42,7 +42,7 @@ LrfOptions LrfOptions::FromConfig(const ConfigNode& c) {
                 "no_return_probability", "max_incidence_deg", "dropped_scan_probability",
                 "bias_enabled", "noise_enabled"});
   LrfOptions o;
-  c.ReadPositive("beams", o.beams);
+  c.ReadPositive("beams", o.beams, 100000);  // no 2D laser has more beams a scan
   if (o.beams < 2) c["beams"].Fail("at least 2 beams");
   c.ReadInRange("fov_deg", o.fov_deg, 1.0, 360.0);
   c.ReadPositive("scan_period", o.scan_period);

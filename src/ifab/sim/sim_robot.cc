@@ -32,6 +32,7 @@ std::array<double, 6> ReadSix(const ConfigNode& c, const char* key) {
 
 SimOptions SimOptions::Load(const std::string& robot_yaml) {
   const ConfigNode root = ConfigNode::LoadFile(robot_yaml);
+  root.ExpectKeys({"feeder_in_base", "sim"});
   return FromConfig(root["sim"]);
 }
 
@@ -48,8 +49,7 @@ SimOptions SimOptions::FromConfig(const ConfigNode& c) {
   if (auto t = c.Find("tracks")) o.tracks = TrackOptions::FromConfig(*t);
   // Both lasers are UTM-30LX: one sensor file, optional per-laser overrides are not needed.
   if (auto l = c.Find("laser")) {
-    const ConfigNode sensor = ConfigNode::LoadFile(UnderData(l->As<std::string>(), here));
-    o.base_laser = o.arm_laser = LrfOptions::FromConfig(sensor["lrf"]);
+    o.base_laser = o.arm_laser = LrfOptions::FromConfig(ConfigNode::LoadSection(UnderData(l->As<std::string>(), here), "lrf"));
   }
   if (auto g = c.Find("gyro")) {
     const ConfigNode sensor = ConfigNode::LoadFile(UnderData(g->As<std::string>(), here));
@@ -224,6 +224,12 @@ void SimRobot::Wait(Seconds dt) {
 
 void SimRobot::Step() {
   const double dt = options_.step;
+  if (faults_) {
+    faults_->OnStep(*this, t_, dt);
+    double l = track_command_.v_left, r = track_command_.v_right;
+    faults_->FilterTracks(&l, &r);
+    base_.Command(l, r);
+  }
   base_.Step(dt);
   servo_.Step(dt, t_ + dt);
   t_ = (++step_count_) * dt;
@@ -240,6 +246,10 @@ void SimRobot::Step() {
   SyncPulse pulse;
   g.stamp = gyro_clock_.StampPacket(t_, &pulse);
   g.rate = gyro_.Measure(Eigen::Vector3d(0, 0, base_.omega()));
+  if (faults_) {
+    faults_->FilterGyro(t_, &g);
+    faults_->FilterStamp(DeviceId::kGyro, &g.stamp);
+  }
   gyro_samples_.push_back(g);
   pulses_.push_back(pulse);
   {
@@ -259,6 +269,7 @@ void SimRobot::Step() {
     if (options_.as_built.encoder_noise > 0.0 && !options_.as_built.exact)
       for (int i = 0; i < 6; ++i) js.q[i] += encoder_rng_.Normal(options_.as_built.encoder_noise);
     js.qd = servo_.qd();
+    if (faults_) faults_->FilterStamp(DeviceId::kArm, &js.stamp);
     joint_states_.push_back(js);
     pulses_.push_back(pulse);
   }
@@ -287,7 +298,10 @@ void SimRobot::Step() {
     // The host stamp arrives after the sweep is over (plus transport).
     scan.stamp.t_host_received += sweep;
     scan.stamp.t = scan.stamp.t_host_received;
-    if (!lrf.options().noise_enabled || !rng.Bernoulli(lrf.options().dropped_scan_probability)) out.push_back(scan);
+    if (faults_) faults_->FilterStamp(arm ? DeviceId::kArmLaser : DeviceId::kBaseLaser, &scan.stamp);
+    const bool lost = faults_ && !faults_->KeepScan(arm, t_, &scan);
+    if (!lost && (!lrf.options().noise_enabled || !rng.Bernoulli(lrf.options().dropped_scan_probability)))
+      out.push_back(scan);
     next += lrf.options().scan_period;
     start = end;
   };
@@ -303,9 +317,28 @@ void SimRobot::Step() {
   else idle(arm_lrf_, next_arm_scan_, arm_scan_start_);
 }
 
-void SimRobot::CommandTracks(const TrackCommand& command) { base_.Command(command.v_left, command.v_right); }
+void SimRobot::CommandTracks(const TrackCommand& command) {
+  track_command_ = command;
+  base_.Command(command.v_left, command.v_right);
+}
 
-void SimRobot::SendJointTrajectory(const JointTrajectory& trajectory) { servo_.Follow(trajectory, t_); }
+void SimRobot::SendJointTrajectory(const JointTrajectory& trajectory) {
+  arm_rejection_.clear();
+  if (faults_) {
+    if (auto why = faults_->RejectTrajectory(t_)) {
+      arm_rejection_ = *why;
+      return;
+    }
+  }
+  servo_.Follow(trajectory, t_);
+}
+
+void SimRobot::DropHeldBrick() {
+  if (!held_) return;
+  held_.reset();  // it falls beside the feeder, out of the scanned area
+  ++bricks_released_;
+  PresentFeederBrick();
+}
 
 bool SimRobot::ArmBusy() const { return servo_.Busy(t_); }
 
@@ -317,6 +350,7 @@ void SimRobot::SetGripper(bool grip) {
     const Eigen::Vector3d top = T_site_brick * Eigen::Vector3d(0, 0, 0.5 * feeder_brick_.box.size.z());
     if ((T_site_gripper.translation() - top).norm() < options_.grip_capture_distance) {
       held_ = T_site_gripper.inverse(Eigen::Isometry) * T_site_brick;
+      if (faults_) faults_->OnGrip(t_);
     }
   } else if (!grip && held_) {
     Pose3 T_site_brick = T_site_gripper * *held_;
@@ -351,6 +385,7 @@ void SimRobot::SetGripper(bool grip) {
 }
 
 void SimRobot::SetLaserActive(DeviceId laser, bool active) {
+  if (faults_) faults_->OnLaserActive(laser, active, t_);
   if (laser == DeviceId::kBaseLaser) base_laser_active_ = active;
   if (laser == DeviceId::kArmLaser) arm_laser_active_ = active;
 }

@@ -13,6 +13,7 @@
 #include "ifab/model/robot_model.h"
 #include "ifab/sim/as_built.h"
 #include "ifab/sim/components.h"
+#include "ifab/sim/faults.h"
 #include "ifab/sim/lrf_model.h"
 #include "ifab/sim/world.h"
 
@@ -85,6 +86,14 @@ class SimRobot final : public hal::Robot {
   /// The gyro's current bias (truth).
   Eigen::Vector3d true_gyro_bias() const { return gyro_.bias(); }
 
+  /// Faults to inject (faults.h; not owned; nullptr: none). The stack sees their effects only.
+  void SetFaults(FaultInjector* faults) { faults_ = faults; }
+  /// The held brick falls (a fault); the feeder presents the next one.
+  void DropHeldBrick();
+  // hal::Robot extras a real machine has: the controller's refusal, the vacuum sensor.
+  std::string ArmRejection() const override { return arm_rejection_; }
+  std::optional<bool> VacuumHolding() const override { return held_.has_value(); }
+
   /// A scan from the arm laser at the current state without noise or timing (tests).
   const LrfModel& arm_lrf() const { return arm_lrf_; }
   const LrfModel& base_lrf() const { return base_lrf_; }
@@ -140,6 +149,9 @@ class SimRobot final : public hal::Robot {
   std::optional<Pose3> held_;  ///< T_gripper_brick of the held brick
   SiteBox feeder_brick_;  ///< its pose is T_base_brick: the feeder rides on the base
   int bricks_released_{0};
+  FaultInjector* faults_{nullptr};
+  std::string arm_rejection_;
+  TrackCommand track_command_;
 };
 
 }  // namespace ifab::sim

@@ -57,6 +57,25 @@ void World::Rebuild() {
   }
 }
 
+void World::AddObstacle(const SiteBox& obstacle) {
+  site_.obstacles.push_back(obstacle);
+  Rebuild();
+}
+
+bool World::RemoveObstacle(const std::string& name) {
+  auto& o = site_.obstacles;
+  const auto it = std::find_if(o.begin(), o.end(), [&](const SiteBox& b) { return b.name == name; });
+  if (it == o.end()) return false;
+  o.erase(it);
+  Rebuild();
+  return true;
+}
+
+void World::MoveBricks(const Pose3& T) {
+  for (auto& b : site_.bricks) b.T_site_box = T * b.T_site_box;
+  Rebuild();
+}
+
 void World::AddBrick(const SiteBox& brick) {
   site_.bricks.push_back(brick);
   bricks_.push_back(Entry{Inverse(brick.T_site_box), brick.box, *Bounds(Primitive{brick.box}, brick.T_site_box)});

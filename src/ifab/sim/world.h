@@ -49,6 +49,10 @@ class World {
   const FloorField& floor() const { return floor_; }
   /// Floor height at (x, y) in the site frame [m].
   double FloorHeight(double x, double y) const { return site_.ground_z + floor_.Height(x, y); }
+  /// Faults (faults.h): an obstacle that appears and goes, every brick moved by T (a bump).
+  void AddObstacle(const SiteBox& obstacle);
+  bool RemoveObstacle(const std::string& name);
+  void MoveBricks(const Pose3& T);
 
   /// First surface hit by the ray origin + t * direction (|direction| = 1), t in (t_min, t_max).
   std::optional<WorldHit> CastRay(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,

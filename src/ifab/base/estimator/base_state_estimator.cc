@@ -71,7 +71,7 @@ EstimatorOptions EstimatorOptions::FromConfig(const ConfigNode& node) {
   if (auto c = node.Find("thinning")) o.thinning = ParseThinning(*c);
   node.Read("deskew", o.deskew);
   node.ReadPositive("max_points", o.max_points);
-  node.ReadPositive("max_beams", o.max_beams);
+  node.ReadPositive("max_beams", o.max_beams, 100000);  // no 2D laser has more beams a scan
   node.ReadPositive("min_points", o.min_points);
   if (auto c = node.Find("residual")) o.residual = ParseResidual(*c);
   node.ReadPositive("sigma", o.sigma);

@@ -121,8 +121,7 @@ BaseGeometry BaseGeometry::FromConfig(const ConfigNode& base) {
 }
 
 BaseGeometry BaseGeometry::Load(const std::string& path) {
-  const ConfigNode root = ConfigNode::LoadFile(path);
-  return FromConfig(root["base"]);
+  return FromConfig(ConfigNode::LoadSection(path, "base"));
 }
 
 std::array<Eigen::Vector2d, 4> BaseGeometry::Corners(const Pose2& T_site_base) const {

@@ -101,7 +101,8 @@ StompPlannerOptions StompPlannerOptions::FromConfig(const ConfigNode& node) {
   }
   node.ReadPositive("phase2_attempts", o.phase2_attempts);
   node.Read("check_reachability", o.check_reachability);
-  node.ReadPositive("reachability_cell", o.reachability_cell);
+  // A cell under 1 mm is no use to a 1.4 t base and its grid would not fit memory.
+  node.ReadInRange("reachability_cell", o.reachability_cell, 1e-3, 10.0);
   node.ReadNonNegative("num_threads", o.num_threads);
   if (auto c = node.Find("phase1")) ReadPhase(*c, &o.phase1);
   if (auto c = node.Find("phase2")) ReadPhase(*c, &o.phase2);
@@ -173,8 +174,15 @@ StompBasePlanner::StompBasePlanner(PlanningScene scene, BaseGeometry robot, Stom
     }
     const double cell = options_.reachability_cell;
     grid_origin_ = lo;
-    grid_nx_ = static_cast<int>(std::ceil((hi.x() - lo.x()) / cell)) + 1;
-    grid_ny_ = static_cast<int>(std::ceil((hi.y() - lo.y()) / cell)) + 1;
+    // The cell count in double first: a tiny cell would overflow int (and the allocation).
+    const double nx = std::ceil((hi.x() - lo.x()) / cell) + 1, ny = std::ceil((hi.y() - lo.y()) / cell) + 1;
+    constexpr double kMaxCells = 1e7;  // 80 MB of labels; a 1 cm grid over a 30 x 30 m site
+    if (!(cell > 0) || !(nx * ny <= kMaxCells))
+      ThrowInputError("stomp.reachability_cell: {} m gives {:.3g} x {:.3g} cells over the site's {:.1f} x {:.1f} m "
+                      "boundary; expected a cell giving at most {:.0g} cells",
+                      cell, nx, ny, hi.x() - lo.x(), hi.y() - lo.y(), kMaxCells);
+    grid_nx_ = static_cast<int>(nx);
+    grid_ny_ = static_cast<int>(ny);
     const double r_in = 0.5 * std::min(checker_.robot().length, checker_.robot().width);
     const double slack = 0.5 * std::sqrt(2.0) * cell;
     std::vector<char> open(static_cast<std::size_t>(grid_nx_ * grid_ny_));

@@ -101,6 +101,23 @@ TEST(Registration, CoarseStepsEndAtTheSameMinimum) {
   EXPECT_NEAR(coarse.num_inliers, fine.num_inliers, 20);  // a few edge points may flip
 }
 
+// Issue 14: NaN or infinite points (a broken file or driver) are left out, not summed into the
+// cost; before, one NaN point made the whole registration NaN.
+TEST(Registration, LeavesOutNonFinitePoints) {
+  auto cloud = BrickCloud(1);
+  const RegistrationSummary clean = Register(cloud, BrickOnGround(kGuessBrick), {});
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  cloud[3].p.x() = nan;
+  cloud[10].origin.z() = std::numeric_limits<double>::infinity();
+  const RegistrationSummary s = Register(cloud, BrickOnGround(kGuessBrick), {});
+  ASSERT_EQ(s.status, RegistrationStatus::kConverged) << s.BriefReport();
+  EXPECT_TRUE(s.Find("brick")->T_base_body.matrix().allFinite());
+  const PoseError e = Error(s.Find("brick")->T_base_body, clean.Find("brick")->T_base_body);
+  EXPECT_LT(e.translation, 1e-4);
+  ASSERT_FALSE(s.warnings.empty());
+  EXPECT_NE(s.warnings.back().find("2 non-finite points left out"), std::string::npos);
+}
+
 // The paper's Fig. 4: a block on the ground seen across its edges returns mixed pixels between
 // the block and the floor behind it. The shadow rule removes them.
 TEST(Registration, RemovesShadowPointsAtTheEdgesOfABlockOnTheGround) {
