@@ -5,7 +5,7 @@
 #include <iostream>
 
 #include "ifab/app/commands.h"
-#include "ifab/base/estimator/estimate_log.h"
+#include "ifab/experiments/estimate_log.h"
 #include "ifab/core/data_path.h"
 
 namespace ifab::app {
@@ -29,8 +29,8 @@ void AddEstimateCommand(CLI::App& app, int& exit_code) {
   sub->add_option("--config", args->config, "Estimator and log options (YAML)")->capture_default_str();
   sub->add_option("--out", args->out, "Output folder")->required();
   sub->callback([args, &exit_code] {
-    const auto options = base::EstimateLogOptions::FromConfig(ConfigNode::LoadFile(args->config));
-    const nlohmann::json m = base::RunEstimateOnLog(args->log, args->relations, options, args->out);
+    const auto options = experiments::EstimateLogOptions::FromConfig(ConfigNode::LoadFile(args->config));
+    const nlohmann::json m = experiments::RunEstimateOnLog(args->log, args->relations, options, args->out);
     std::cout << "scans " << m["scans"] << ", relations " << m["relations"];
     if (m["relations"].get<int>() > 0) {
       std::cout << ", translation error mean " << m["translation_error_m"]["mean"].get<double>()
