@@ -275,13 +275,22 @@ nlohmann::json RunEstimateOnLog(const std::string& log_path, const std::string& 
       const bool updated = !(odom.x == odom_prev.x && odom.y == odom_prev.y && odom.theta == odom_prev.theta);
       const double dt = clock[k] - clock[k - 1];
       if (!factor) {
-        // The paper's eq. 2 with the odometry heading change as the gyro; the step seeds the guess.
-        const Pose2 step = odom_prev.inverse() * odom;
-        GyroSample g;
-        g.stamp.t = clock[k];
-        g.rate.z() = step.theta / dt;
-        estimator.AddGyro(g);
-        motion = MotionMeasurement{step, Eigen::Matrix3d::Zero()};
+        // The paper's eq. 2 with the odometry heading change as the gyro; the step seeds the
+        // guess. Without new odometry there is no gyro sample for the interval (the estimator's
+        // constant-velocity prior predicts); with it, the odometry's motion since the last
+        // updated scan, applied from the estimate there.
+        if (updated) {
+          const Pose2 odom_delta = log.scans[last_update].odom.inverse() * odom;
+          const Pose2 step = poses[k - 1].inverse() * poses[last_update] * odom_delta;
+          GyroSample g;
+          g.stamp.t = clock[k];
+          g.rate.z() = step.theta / dt;
+          estimator.AddGyro(g);
+          motion = MotionMeasurement{step, Eigen::Matrix3d::Zero()};
+          last_update = k;
+        } else {
+          ++no_update_scans;
+        }
       } else if (updated) {
         // The odometry's motion since the last updated scan, applied from the estimate there.
         const Pose2 odom_delta = log.scans[last_update].odom.inverse() * odom;

@@ -51,6 +51,22 @@ TEST(EvaluateRelations, KuemmerleMetric) {
   EXPECT_EQ(e.unmatched, 1);
 }
 
+// false_ok_rate counts a wrong relation only when every scan between its stamps was ok.
+TEST(FalseOkRate, WrongRelationsCountOnlyWhenAllScansBetweenWereOk) {
+  const std::vector<Seconds> stamps{0.0, 1.0, 2.0, 3.0, 10.0};
+  const std::vector<Pose2> poses{{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {3.5, 0, 0}, {4, 0, 0}};
+  const std::vector<char> usable{1, 1, 1, 0, 1};
+  const std::vector<Relation> rel{
+      {0.0, 1.0, {1.0, 0, 0}, 1},   // right
+      {1.0, 2.0, {1.3, 0, 0}, 2},   // 0.3 m wrong, all ok: a false ok
+      {2.0, 3.0, {1.0, 0, 0}, 3},   // 0.5 m wrong, but scan 3 was flagged
+      {0.0, 10.0, {9.0, 0, 0}, 4}}; // longer than 5 s: not counted
+  const FalseOk f = FalseOkRate(stamps, poses, usable, rel, 5.0, 0.2);
+  EXPECT_EQ(f.relations, 3);
+  EXPECT_EQ(f.false_ok, 1);
+  EXPECT_NEAR(f.rate, 1.0 / 3.0, 1e-12);
+}
+
 TEST(ErrorStats, MeanStdMax) {
   const ErrorStats s = ErrorStats::Of({1.0, 2.0, 3.0, 6.0});
   EXPECT_DOUBLE_EQ(s.mean, 3.0);
