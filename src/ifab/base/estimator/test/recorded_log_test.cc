@@ -42,7 +42,7 @@ ScanSpec Sick181() {
 // that the match takes for information along the corridor (ratio ~0.05, not degenerate), and the
 // estimate slides (2.4 m after 20.6 m of odometry). Raw points are kept in carmen.yaml because
 // polylines cost the shared logs accuracy (MIT CSAIL 0.56 m, ACES 1.06 m): an open problem, see
-// README.md. (Its thinning is replaced too, below.)
+// README.md. (Its thinning and degeneracy_ratio are replaced too, below.)
 TEST(RecordedLog, CorridorFollowsOdometryAlongTheAxisAndReportsTheDegenerateDirection) {
   EstimatorOptions o = RecordedLogOptions();
   o.interpolate_reference = true;
@@ -50,6 +50,9 @@ TEST(RecordedLog, CorridorFollowsOdometryAlongTheAxisAndReportsTheDegenerateDire
   // carmen.yaml's thinning turns each match by ~0.01 deg one way (see Thinning): 1 deg over the
   // 70 keyframes of this corridor.
   o.thinning = Thinning::kNoiseIndependent;
+  // And scan directions under 2 % of the strongest are not trusted (carmen.yaml: 0, which
+  // measured better on the shared logs but lets this corridor slide: 0.65 m after 20.6 m).
+  o.degeneracy_ratio = 0.02;
   const OdometryNoise noise = RecordedLogNoise();
   BaseStateEstimator estimator(o, Pose2());
   const World world = testing::Corridor(1.0, 400.0);
