@@ -1064,6 +1064,9 @@ const BaseEstimate& BaseStateEstimator::AddScan(const LaserScan& scan,
     dx[2] = WrapAngle(dx[2]);
     e.mahalanobis_sq = InnovationMahalanobisSq(deg, info_prior, dx, &e.gate_dof);
     m.AddInnovation(e.mahalanobis_sq, e.gate_dof);
+    if (o.gate_translation_only) {
+      e.mahalanobis_sq = InnovationTranslationMahalanobisSq(deg, info_prior, dx, &e.gate_dof);
+    }
     if (e.gate_dof > 0 && e.mahalanobis_sq > m.gate_chi2[static_cast<std::size_t>(e.gate_dof)]) {
       return finish_failed(EstimateStatus::kUnexplainedJump);
     }

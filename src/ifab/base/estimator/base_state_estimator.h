@@ -169,6 +169,10 @@ struct EstimatorOptions {
   /// constrains, exceeds the chi-square quantile of this probability (their combined
   /// covariance: the match's inverse information and the prior's). 0: off.
   double gate_probability{0.999};
+  /// The gate tests the translation only (heading marginalised out, 2 dof): a laser line's
+  /// odometry heading may lag the scan on fast turns, so the heading innovation is not a
+  /// sign of a wrong match there; a match sliding along a corridor shows in the translation.
+  bool gate_translation_only{false};
   /// With an informative prior: the prior alone decides the directions the scan constrains
   /// less than the prior does (Zhang et al.'s solution remapping, see degeneracy.h).
   bool remap_degenerate{true};

@@ -79,4 +79,40 @@ double InnovationMahalanobisSq(const DegeneracyAnalysis& a, const Eigen::Matrix3
   return m2;
 }
 
+double InnovationTranslationMahalanobisSq(const DegeneracyAnalysis& a,
+                                          const Eigen::Matrix3d& info_prior,
+                                          const Eigen::Vector3d& dx, int* dof) {
+  // In the generalised eigenbasis (dx = V c, V^T Lambda_prior V = I) the scan-only offset is
+  // u_i = c_i (1 + lambda_i) / lambda_i with combined variance (1 + lambda_i) / lambda_i.
+  // Degenerate directions: the scan says nothing, infinite variance, i.e. they drop out of the
+  // information of the translation marginal below.
+  const Eigen::Vector3d c = a.eigenvectors.transpose() * info_prior * dx;
+  Eigen::Vector3d y = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d S = Eigen::Matrix3d::Zero();
+  constexpr double kUnknown = 1e12;  // [m^2]: a variance no laser match comes near
+  for (int i = 0; i < 3; ++i) {
+    const Eigen::Vector3d v = a.eigenvectors.col(i);
+    if (a.degenerate[static_cast<std::size_t>(i)]) {
+      const Eigen::Vector3d u = v.normalized();
+      S += kUnknown * u * u.transpose();
+      continue;
+    }
+    const double s = (1.0 + a.eigenvalues(i)) / a.eigenvalues(i);
+    y += c(i) * s * v;
+    S += s * v * v.transpose();
+  }
+  const Eigen::Matrix2d S_tt = S.topLeftCorner<2, 2>();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(S_tt);
+  const Eigen::Vector2d z = es.eigenvectors().transpose() * y.head<2>();
+  double m2 = 0.0;
+  int n = 0;
+  for (int i = 0; i < 2; ++i) {
+    if (!(es.eigenvalues()(i) < 1e-3 * kUnknown)) continue;  // a direction the scan leaves open
+    m2 += z(i) * z(i) / es.eigenvalues()(i);
+    ++n;
+  }
+  if (dof) *dof = n;
+  return m2;
+}
+
 }  // namespace ifab::base

@@ -61,4 +61,13 @@ double InnovationMahalanobisSq(const DegeneracyAnalysis& analysis,
                                const Eigen::Matrix3d& info_prior, const Eigen::Vector3d& dx,
                                int* dof);
 
+/// The same innovation's squared Mahalanobis distance over the translation alone (the heading
+/// marginalised out): the match's scan-only translation offset from the prior against the
+/// translation block of their combined covariance. A direction the prior alone decides counts
+/// as unknown (its share of the translation is not tested). *dof: the translation directions
+/// tested (0-2).
+double InnovationTranslationMahalanobisSq(const DegeneracyAnalysis& analysis,
+                                          const Eigen::Matrix3d& info_prior,
+                                          const Eigen::Vector3d& dx, int* dof);
+
 }  // namespace ifab::base

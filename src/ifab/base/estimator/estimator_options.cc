@@ -53,7 +53,7 @@ EstimatorOptions EstimatorOptions::FromConfig(const ConfigNode& node) {
                    "reseed_after_failures", "max_reference_gap_sigmas", "end_margin_sigmas",
                    "prior_weight", "reference_weighting", "interpolate_reference",
                    "keyframe_capacity", "thinning", "deskew", "min_inlier_fraction",
-                   "gate_probability", "remap_degenerate", "prior_scale_window"});
+                   "gate_probability", "gate_translation_only", "remap_degenerate", "prior_scale_window"});
   node.ReadNonNegative("min_range", o.min_range);
   node.ReadPositive("max_range", o.max_range);
   node.ReadNonNegative("min_point_spacing", o.min_point_spacing);
@@ -96,6 +96,7 @@ EstimatorOptions EstimatorOptions::FromConfig(const ConfigNode& node) {
   node.ReadNonNegative("reseed_after_failures", o.reseed_after_failures);
   node.ReadInRange("min_inlier_fraction", o.min_inlier_fraction, 0.0, 1.0);
   node.ReadInRange("gate_probability", o.gate_probability, 0.0, 1.0 - 1e-12);
+  node.Read("gate_translation_only", o.gate_translation_only);
   node.Read("remap_degenerate", o.remap_degenerate);
   node.ReadNonNegative("prior_scale_window", o.prior_scale_window);
   const std::string problem = o.Validate();
