@@ -11,130 +11,14 @@
 #include <cstdint>
 #include <limits>
 #include <nanoflann.hpp>
+#include <boost/math/distributions/chi_squared.hpp>
 
+#include "ifab/base/estimator/degeneracy.h"
 #include "ifab/base/estimator/kernel_residual.h"
 #include "ifab/core/angles.h"
 #include "ifab/core/error.h"
 
 namespace ifab::base {
-
-// ---------------------------------------------------------------------------------------------
-// Options
-
-namespace {
-
-MatchResidual ParseResidual(const ConfigNode& node) {
-  const auto s = node.As<std::string>();
-  if (s == "kernel") return MatchResidual::kKernel;
-  if (s == "point_to_line") return MatchResidual::kPointToLine;
-  node.Fail("'kernel' or 'point_to_line'");
-}
-
-ReferenceWeighting ParseWeighting(const ConfigNode& node) {
-  const auto s = node.As<std::string>();
-  if (s == "none") return ReferenceWeighting::kNone;
-  if (s == "arc_length") return ReferenceWeighting::kArcLength;
-  node.Fail("'none' or 'arc_length'");
-}
-
-Thinning ParseThinning(const ConfigNode& node) {
-  const auto s = node.As<std::string>();
-  if (s == "nearest_beyond_spacing") return Thinning::kNearestBeyondSpacing;
-  if (s == "noise_independent") return Thinning::kNoiseIndependent;
-  node.Fail("'nearest_beyond_spacing' or 'noise_independent'");
-}
-
-MotionPrior ParseMotionPrior(const ConfigNode& node) {
-  const auto s = node.As<std::string>();
-  if (s == "none") return MotionPrior::kNone;
-  if (s == "constant_velocity") return MotionPrior::kConstantVelocity;
-  node.Fail("'none' or 'constant_velocity'");
-}
-
-}  // namespace
-
-EstimatorOptions EstimatorOptions::FromConfig(const ConfigNode& node) {
-  EstimatorOptions o;
-  node.ExpectKeys({"min_range", "max_range", "min_point_spacing", "max_points", "max_beams",
-                   "min_points", "residual", "sigma", "coarse_sigmas", "search_radius_sigmas",
-                   "neighbors_per_reference", "num_reference_scans", "keyframe_distance",
-                   "keyframe_angle_deg", "keyframe_interval", "horizon",
-                   "reference_point_spacing", "gyro_weight", "motion_prior", "max_associations",
-                   "max_iterations", "converged_step", "min_matched_fraction",
-                   "degeneracy_ratio", "max_rotation_jump_deg", "max_translation_jump",
-                   "reseed_after_failures", "max_reference_gap_sigmas", "end_margin_sigmas",
-                   "prior_weight", "reference_weighting", "interpolate_reference",
-                   "keyframe_capacity", "thinning", "deskew"});
-  node.ReadNonNegative("min_range", o.min_range);
-  node.ReadPositive("max_range", o.max_range);
-  node.ReadNonNegative("min_point_spacing", o.min_point_spacing);
-  if (auto c = node.Find("thinning")) o.thinning = ParseThinning(*c);
-  node.Read("deskew", o.deskew);
-  node.ReadPositive("max_points", o.max_points);
-  node.ReadPositive("max_beams", o.max_beams, 100000);  // no 2D laser has more beams a scan
-  node.ReadPositive("min_points", o.min_points);
-  if (auto c = node.Find("residual")) o.residual = ParseResidual(*c);
-  node.ReadPositive("sigma", o.sigma);
-  if (auto c = node.Find("coarse_sigmas")) {
-    o.coarse_sigmas = c->AsNumbers();
-    for (double s : o.coarse_sigmas) {
-      if (!(s > 0.0)) c->Fail("a list of positive numbers");
-    }
-  }
-  node.ReadPositive("search_radius_sigmas", o.search_radius_sigmas);
-  node.ReadPositive("neighbors_per_reference", o.neighbors_per_reference);
-  node.ReadPositive("num_reference_scans", o.num_reference_scans);
-  node.ReadNonNegative("keyframe_distance", o.keyframe_distance);
-  node.ReadNonNegative("keyframe_angle_deg", o.keyframe_angle_deg);
-  node.ReadPositive("keyframe_interval", o.keyframe_interval);
-  node.ReadPositive("horizon", o.horizon);
-  node.ReadNonNegative("reference_point_spacing", o.reference_point_spacing);
-  node.ReadNonNegative("max_reference_gap_sigmas", o.max_reference_gap_sigmas);
-  node.ReadNonNegative("end_margin_sigmas", o.end_margin_sigmas);
-  node.ReadNonNegative("prior_weight", o.prior_weight);
-  if (auto c = node.Find("reference_weighting")) o.reference_weighting = ParseWeighting(*c);
-  node.Read("interpolate_reference", o.interpolate_reference);
-  node.ReadNonNegative("keyframe_capacity", o.keyframe_capacity);
-  node.ReadNonNegative("gyro_weight", o.gyro_weight);
-  if (auto c = node.Find("motion_prior")) o.motion_prior = ParseMotionPrior(*c);
-  node.ReadPositive("max_associations", o.max_associations);
-  node.ReadPositive("max_iterations", o.max_iterations);
-  node.ReadPositive("converged_step", o.converged_step);
-  node.ReadInRange("min_matched_fraction", o.min_matched_fraction, 0.0, 1.0);
-  node.ReadInRange("degeneracy_ratio", o.degeneracy_ratio, 0.0, 1.0);
-  node.ReadPositive("max_rotation_jump_deg", o.max_rotation_jump_deg);
-  node.ReadPositive("max_translation_jump", o.max_translation_jump);
-  node.ReadNonNegative("reseed_after_failures", o.reseed_after_failures);
-  const std::string problem = o.Validate();
-  if (!problem.empty()) ThrowInputError("{}: {}", node.Where(), problem);
-  return o;
-}
-
-std::string EstimatorOptions::Validate() const {
-  if (!(max_range > min_range)) return fmt::format("max_range {} must exceed min_range {}", max_range, min_range);
-  if (max_points <= 0 || max_beams <= 0 || min_points <= 0) return "max_points, max_beams and min_points must be positive";
-  if (min_points > max_points) return fmt::format("min_points {} exceeds max_points {}", min_points, max_points);
-  if (!(sigma > 0.0)) return "sigma must be positive";
-  for (double s : coarse_sigmas) {
-    if (!(s > 0.0)) return "coarse_sigmas must be positive";
-  }
-  if (num_reference_scans <= 0 || neighbors_per_reference <= 0) return "num_reference_scans and neighbors_per_reference must be positive";
-  if (max_associations <= 0 || max_iterations <= 0) return "max_associations and max_iterations must be positive";
-  if (gyro_weight < 0.0) return "gyro_weight must be >= 0";
-  return {};
-}
-
-const char* StatusName(EstimateStatus status) {
-  switch (status) {
-    case EstimateStatus::kOk: return "ok";
-    case EstimateStatus::kDegenerate: return "degenerate";
-    case EstimateStatus::kReference: return "reference";
-    case EstimateStatus::kTooFewPoints: return "too_few_points";
-    case EstimateStatus::kUnexplainedJump: return "unexplained_jump";
-    case EstimateStatus::kSolverFailed: return "solver_failed";
-  }
-  return "unknown";
-}
 
 // ---------------------------------------------------------------------------------------------
 // Internals
@@ -238,6 +122,37 @@ struct BaseStateEstimator::Impl {
   Eigen::Vector3d velocity{Eigen::Vector3d::Zero()};  // world vx, vy, omega
   bool have_velocity{false};
   int consecutive_failures{0};
+  // Covariance of the pose relative to the reference set (world frame): the last match's, grown
+  // by the prior's step covariance over flagged scans. Propagates the odometry factor's prior.
+  Eigen::Matrix3d pose_cov{Eigen::Matrix3d::Zero()};
+  // Per sigma level: the scan terms' residual variance per row at the last accepted solution,
+  // which converts the scan's cost-unit Hessian to physical information (and back for the
+  // prior). Negative: not known yet.
+  std::vector<double> residual_var;
+  std::array<double, 4> gate_chi2{};  // chi-square quantile of gate_probability by dof
+  std::array<double, 4> chi2_median{};  // chi-square median by dof
+  // The identified scale of the motion covariance (see prior_scale_window): a ring of the
+  // normalised innovations and a scratch copy for the median.
+  double prior_scale{1.0};
+  std::vector<double> nis_ring, nis_scratch;
+  std::size_t nis_next{0};
+  void AddInnovation(double m2, int dof) {
+    if (o.prior_scale_window <= 0 || dof <= 0) return;
+    const double r = m2 * prior_scale / chi2_median[static_cast<std::size_t>(dof)];
+    if (nis_ring.size() < static_cast<std::size_t>(o.prior_scale_window)) {
+      nis_ring.push_back(r);
+    } else {
+      nis_ring[nis_next] = r;
+      nis_next = (nis_next + 1) % nis_ring.size();
+    }
+    nis_scratch.assign(nis_ring.begin(), nis_ring.end());
+    auto mid = nis_scratch.begin() + static_cast<std::ptrdiff_t>(nis_scratch.size() / 2);
+    std::nth_element(nis_scratch.begin(), mid, nis_scratch.end());
+    // Start from the given model until a tenth of the window is in.
+    if (nis_ring.size() * 10 >= static_cast<std::size_t>(o.prior_scale_window)) {
+      prior_scale = std::max(1.0, *mid);
+    }
+  }
   std::uint64_t keyframe_counter{0};
   std::vector<std::unique_ptr<Keyframe>> keyframes;
 
@@ -275,6 +190,10 @@ struct BaseStateEstimator::Impl {
     Eigen::Vector3d x_pred{Eigen::Vector3d::Zero()};  // the predicted pose (weak prior's anchor)
     double prior_weight{0.0};
     double prior_lever{1.0};
+    // The odometry factor (an informative prior): the weight matrix in cost units, replacing
+    // the weak prior_weight pull.
+    bool prior_full{false};
+    Eigen::Matrix3d prior_W{Eigen::Matrix3d::Zero()};
     bool operator()(const double* x, double* residuals, double* jacobian) const;
   } eq3;
   ceres::TinySolver<Eq3> solver;
@@ -314,6 +233,17 @@ struct BaseStateEstimator::Impl {
     knn_index.resize(static_cast<std::size_t>(k));
     knn_dist.resize(static_cast<std::size_t>(k));
     eq3.impl = this;
+    residual_var.assign(static_cast<std::size_t>(num_levels), -1.0);
+    nis_ring.reserve(static_cast<std::size_t>(o.prior_scale_window));
+    nis_scratch.reserve(static_cast<std::size_t>(o.prior_scale_window));
+    for (int dof = 1; dof <= 3; ++dof) {
+      chi2_median[static_cast<std::size_t>(dof)] =
+          boost::math::median(boost::math::chi_squared(dof));
+      gate_chi2[static_cast<std::size_t>(dof)] =
+          o.gate_probability > 0.0
+              ? boost::math::quantile(boost::math::chi_squared(dof), o.gate_probability)
+              : std::numeric_limits<double>::infinity();
+    }
     solver.options.max_num_iterations = o.max_iterations + 1;  // TinySolver counts from 1
     // Stop when a step is below 1e-4 of the increment so far (the increment is relative to the
     // round's start pose: ~10 um for a 0.1 m motion).
@@ -796,6 +726,25 @@ struct BaseStateEstimator::Impl {
     return ne;
   }
 
+  // Of the measurement points with pairs, the fraction whose nearest reference point lies
+  // within 2 sigma (kernel >= exp(-1)).
+  double InlierFraction(const Pose2& T_world_base, double sigma) const {
+    const double r2 = 4.0 * sigma * sigma;
+    int matched = 0, inliers = 0;
+    for (std::size_t i = 0; i + 1 < pair_begin.size(); ++i) {
+      const int begin = pair_begin[i], end = pair_begin[i + 1];
+      if (begin == end) continue;
+      ++matched;
+      const Eigen::Vector2d p = T_world_base * meas_base[i];
+      double best = std::numeric_limits<double>::infinity();
+      for (int k = begin; k < end; ++k) {
+        best = std::min(best, (p - pairs[static_cast<std::size_t>(k)].p_ref_world).squaredNorm());
+      }
+      inliers += best <= r2 ? 1 : 0;
+    }
+    return matched > 0 ? static_cast<double>(inliers) / static_cast<double>(matched) : 0.0;
+  }
+
   // Mean e_mi over the points (kernels of peak 1) for the current pairs.
   double Score(const Pose2& T_world_base, double sigma) const {
     double sum = 0.0;
@@ -820,7 +769,14 @@ bool BaseStateEstimator::Impl::Eq3::operator()(const double* x, double* residual
   }
   // A weak pull to the prediction keeps directions the scan does not observe (a corridor's
   // axis) at the prediction instead of letting the solver wander along them.
-  if (prior_weight > 0.0) {
+  if (prior_full) {
+    Eigen::Vector3d dx(x0[0] + x[0] - x_pred[0], x0[1] + x[1] - x_pred[1], 0.0);
+    dx[2] = WrapAngle(x0[2] + x[2] - x_pred[2]);
+    const Eigen::Vector3d Wdx = prior_W * dx;
+    ne.H += prior_W;
+    ne.g += Wdx;
+    ne.sum_sq += dx.dot(Wdx);
+  } else if (prior_weight > 0.0) {
     const Eigen::Vector3d w(prior_weight, prior_weight, prior_weight * prior_lever * prior_lever);
     Eigen::Vector3d dx(x0[0] + x[0] - x_pred[0], x0[1] + x[1] - x_pred[1], 0.0);
     dx[2] = WrapAngle(x0[2] + x[2] - x_pred[2]);
@@ -883,6 +839,7 @@ void BaseStateEstimator::Reset(const Pose2& T_world_base, Seconds t, bool keep_r
   }
   m.consecutive_failures = 0;
   m.pose = T_world_base;
+  m.pose_cov.setZero();
   m.t_last = t;
   m.initialized = true;
   m.DropGyroUntil(t - 1e-9);
@@ -902,8 +859,9 @@ void BaseStateEstimator::AddGyro(const GyroSample& sample) {
   m.PushGyro(sample.stamp.t, sample.rate.z());
 }
 
+
 const BaseEstimate& BaseStateEstimator::AddScan(const LaserScan& scan,
-                                                const std::optional<Pose2>& motion_hint) {
+                                                const std::optional<MotionMeasurement>& motion) {
   Impl& m = *impl_;
   const EstimatorOptions& o = options_;
   IFAB_THROW_UNLESS(static_cast<int>(scan.size()) <= o.max_beams,
@@ -925,14 +883,14 @@ const BaseEstimate& BaseStateEstimator::AddScan(const LaserScan& scan,
   m.DropGyroUntil(t);
 
   // The base's twist during the sweep (improvement, off for the paper's rigid scan): the turn
-  // rate from the gyro since the previous scan (else the hint's or the last estimate's), the
-  // velocity from the hint or the last estimate, in the base frame.
+  // rate from the gyro since the previous scan (else the motion's or the last estimate's), the
+  // velocity from the motion or the last estimate, in the base frame.
   Eigen::Vector2d v_base = Eigen::Vector2d::Zero();
   double omega = 0.0;
   if (o.deskew && dt > 1e-6) {
-    if (motion_hint) {
-      v_base = motion_hint->translation() / dt;
-      omega = motion_hint->theta / dt;
+    if (motion) {
+      v_base = motion->step.translation() / dt;
+      omega = motion->step.theta / dt;
     } else if (m.have_velocity) {
       v_base = m.pose.rotation().transpose() * m.velocity.head<2>();
       omega = m.velocity.z();
@@ -941,35 +899,56 @@ const BaseEstimate& BaseStateEstimator::AddScan(const LaserScan& scan,
   }
   m.ExtractPoints(scan, v_base, omega);
 
-  // Prediction: gyro rotation (else the hint's or the last turn rate), translation from the
-  // motion hint or the motion prior.
+  // Prediction: gyro rotation (else the motion's or the last turn rate), translation from the
+  // motion or the motion prior. With a motion covariance the prediction is an informative
+  // prior: the pose's covariance propagated through the step plus the step's own.
   Pose2 predicted = m.pose;
   const bool cv = o.motion_prior == MotionPrior::kConstantVelocity && m.have_velocity;
-  if (motion_hint) {
-    predicted = m.pose * *motion_hint;
+  if (motion) {
+    predicted = m.pose * motion->step;
   } else if (cv) {
     predicted.x += m.velocity.x() * dt;
     predicted.y += m.velocity.y() * dt;
     predicted.theta = WrapAngle(m.pose.theta + m.velocity.z() * dt);
   }
   if (e.gyro_used) predicted.theta = WrapAngle(m.pose.theta + dtheta_gyro);
+  const bool informative = motion && motion->HasCovariance();
+  Eigen::Matrix3d prior_cov = Eigen::Matrix3d::Zero();
+  if (informative) {
+    // d(T_prev * step) / d(prev) = [I, perp(R_prev t_step); 0, 1].
+    const Eigen::Vector2d arm = m.pose.rotation() * motion->step.translation();
+    Eigen::Matrix3d J = Eigen::Matrix3d::Identity();
+    J(0, 2) = -arm.y();
+    J(1, 2) = arm.x();
+    prior_cov = J * m.pose_cov * J.transpose() +
+                m.prior_scale * StepCovarianceInWorld(m.pose, motion->covariance);
+  }
+  e.prior_used = informative;
 
   auto finish_failed = [&](EstimateStatus status) -> const BaseEstimate& {
     e.status = status;
     e.T_world_base = predicted;
-    // The prediction's uncertainty: a generous guess (the match gave nothing).
-    const double s_t = o.max_translation_jump, s_r = DegToRad(o.max_rotation_jump_deg);
-    e.covariance = Eigen::Vector3d(s_t * s_t, s_t * s_t, s_r * s_r).asDiagonal();
+    if (informative) {
+      e.covariance = prior_cov;
+    } else {
+      // The prediction's uncertainty: a generous guess (the match gave nothing).
+      const double s_t = o.max_translation_jump, s_r = DegToRad(o.max_rotation_jump_deg);
+      e.covariance = Eigen::Vector3d(s_t * s_t, s_t * s_t, s_r * s_r).asDiagonal();
+    }
     m.pose = predicted;
+    m.pose_cov = informative ? prior_cov : Eigen::Matrix3d::Zero();
     m.t_last = t;
-    // After several failures in a row the references are too far behind to recover from:
-    // restart the reference set from this scan at the predicted pose (the status stays flagged).
-    if (o.reseed_after_failures > 0 && ++m.consecutive_failures >= o.reseed_after_failures &&
-        static_cast<int>(m.valid_base.size()) >= o.min_points) {
-      for (auto& kf : m.keyframes) kf->active = false;
-      m.AddKeyframe(predicted, t);
-      e.keyframe_added = true;
-      m.consecutive_failures = 0;
+    // After several scans in a row without overlap the references are too far behind to
+    // recover from: restart the reference set from this scan at the prior's pose (the status
+    // stays flagged; the keyframe's pose is the prior's, not a match's).
+    if (status == EstimateStatus::kTooFewPoints) {
+      if (o.reseed_after_failures > 0 && ++m.consecutive_failures >= o.reseed_after_failures &&
+          static_cast<int>(m.valid_base.size()) >= o.min_points) {
+        for (auto& kf : m.keyframes) kf->active = false;
+        m.AddKeyframe(predicted, t);
+        e.keyframe_added = true;
+        m.consecutive_failures = 0;
+      }
     }
     return e;
   };
@@ -997,12 +976,16 @@ const BaseEstimate& BaseStateEstimator::AddScan(const LaserScan& scan,
   // Eq. 3 by levels of sigma (coarse to fine when configured), re-associating in each.
   m.SelectReferences(predicted);
   Eigen::Vector3d x(predicted.x, predicted.y, predicted.theta);
+  const Eigen::Vector3d x_pred = x;
   m.eq3.use_gyro = e.gyro_used;
   m.eq3.gyro_weight = o.gyro_weight;
   m.eq3.theta_gyro = predicted.theta;
   m.eq3.x_pred = x;
   m.eq3.prior_weight = o.prior_weight;
   m.eq3.prior_lever = 1.0;
+  m.eq3.prior_full = informative;
+  Eigen::Matrix3d info_prior = Eigen::Matrix3d::Zero();
+  if (informative) info_prior = prior_cov.inverse();
   const int fine = m.num_levels - 1;
   bool pairs_current = false;  // the pairs were made at (about) the final pose
   for (int level = 0; level < m.num_levels; ++level) {
@@ -1014,6 +997,17 @@ const BaseEstimate& BaseStateEstimator::AddScan(const LaserScan& scan,
     for (int round = 0; round < o.max_associations; ++round) {
       m.Associate(Pose2(x[0], x[1], x[2]), level, radius);
       if (m.pairs.empty()) break;
+      if (informative) {
+        // The odometry factor in the scan's cost units: physical information times the scan
+        // terms' residual variance per row (the same factor that turns the scan's Hessian into
+        // its covariance), so each side weighs by what it knows.
+        double& var = m.residual_var[static_cast<std::size_t>(level)];
+        if (var <= 0.0) {
+          const NormalEquations ne0 = m.Accumulate(Pose2(x[0], x[1], x[2]), sigma);
+          var = std::max(ne0.sum_sq / std::max(1, ne0.rows - 3), 1e-12);
+        }
+        m.eq3.prior_W = var * info_prior;
+      }
       // TinySolver's function tolerance is absolute (on 2 * cost): scale it with the pairs.
       m.solver.options.function_tolerance = 1e-8 * static_cast<double>(m.pairs.size());
       m.eq3.x0 = x;
@@ -1027,7 +1021,7 @@ const BaseEstimate& BaseStateEstimator::AddScan(const LaserScan& scan,
       if (pairs_current) break;
     }
   }
-  const Pose2 solved(x[0], x[1], x[2]);
+  Pose2 solved(x[0], x[1], x[2]);
   e.num_points = static_cast<int>(m.meas_base.size());
 
   // Quality at the solution, with a fresh association at the finest level unless the last
@@ -1045,35 +1039,62 @@ const BaseEstimate& BaseStateEstimator::AddScan(const LaserScan& scan,
   if (m.pairs.empty() || e.matched_fraction < o.min_matched_fraction) {
     return finish_failed(EstimateStatus::kTooFewPoints);
   }
+  e.inlier_fraction = m.InlierFraction(solved, sigma);
+  if (e.inlier_fraction < o.min_inlier_fraction) return finish_failed(EstimateStatus::kPoorScore);
   e.score = m.Score(solved, sigma);
   NormalEquations ne = m.Accumulate(solved, sigma);
+  // The scan's residual variance per row: covariance = H^-1 * variance (the usual estimate of
+  // a least-squares fit's covariance); the scan's physical information is H / variance.
+  const double residual_var = std::max(ne.sum_sq / std::max(1, ne.rows - 3), 1e-12);
   e.gyro_error_rad = e.gyro_used ? WrapAngle(solved.theta - predicted.theta) : 0.0;
   if (e.gyro_used) ne.H(2, 2) += o.gyro_weight;
   e.cost = 0.5 * (ne.sum_sq + (e.gyro_used ? o.gyro_weight * e.gyro_error_rad * e.gyro_error_rad : 0.0));
-  // Degeneracy: eigenvalues of the information with theta scaled to metres at the points'
-  // RMS lever arm about the base.
   double lever_sq = 0.0;
   for (const auto& q : m.meas_base) lever_sq += q.squaredNorm();
   const double lever = std::sqrt(std::max(lever_sq / static_cast<double>(m.meas_base.size()), 1e-6));
-  const Eigen::Vector3d scale(1.0, 1.0, 1.0 / lever);
-  const Eigen::Matrix3d H_scaled = scale.asDiagonal() * ne.H * scale.asDiagonal();
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(H_scaled, Eigen::EigenvaluesOnly);
-  const double lmax = es.eigenvalues()(2);
-  e.degeneracy = lmax > 0.0 ? std::max(0.0, es.eigenvalues()(0)) / lmax : 0.0;
-  // Covariance: inverse information times the residual variance per row.
-  const double residual_var = std::max(ne.sum_sq / std::max(1, ne.rows - 3), 1e-12);
-  e.covariance = (ne.H + 1e-9 * Eigen::Matrix3d::Identity()).inverse() * residual_var;
+  const Eigen::Matrix3d info_scan = ne.H / residual_var;
 
-  // A jump the gyro or the motion does not explain.
-  const bool rotation_jump =
-      e.gyro_used && std::abs(e.gyro_error_rad) > DegToRad(o.max_rotation_jump_deg);
-  const bool translation_jump =
-      (solved.translation() - predicted.translation()).norm() > o.max_translation_jump;
-  if (rotation_jump || translation_jump) return finish_failed(EstimateStatus::kUnexplainedJump);
+  if (informative) {
+    // Degenerate directions against the prior; the gate over the others (degeneracy.h).
+    const DegeneracyAnalysis deg = AnalyseDegeneracy(info_scan, &info_prior, lever, o.degeneracy_ratio);
+    e.degeneracy = deg.ratio;
+    e.num_degenerate = deg.num_degenerate;
+    e.degenerate_directions = deg.directions;
+    Eigen::Vector3d dx = x - x_pred;
+    dx[2] = WrapAngle(dx[2]);
+    e.mahalanobis_sq = InnovationMahalanobisSq(deg, info_prior, dx, &e.gate_dof);
+    m.AddInnovation(e.mahalanobis_sq, e.gate_dof);
+    if (o.gate_translation_only) {
+      e.mahalanobis_sq = InnovationTranslationMahalanobisSq(deg, info_prior, dx, &e.gate_dof);
+    }
+    if (e.gate_dof > 0 && e.mahalanobis_sq > m.gate_chi2[static_cast<std::size_t>(e.gate_dof)]) {
+      return finish_failed(EstimateStatus::kUnexplainedJump);
+    }
+    if (o.remap_degenerate && deg.num_degenerate > 0) {
+      const Eigen::Vector3d dx_remapped = RemapDegenerate(deg, info_prior, dx);
+      solved = Pose2(x_pred[0] + dx_remapped[0], x_pred[1] + dx_remapped[1],
+                     WrapAngle(x_pred[2] + dx_remapped[2]));
+    }
+    e.covariance = (deg.info_scan_trusted + info_prior).inverse();
+    m.residual_var[static_cast<std::size_t>(fine)] = residual_var;
+  } else {
+    const DegeneracyAnalysis deg = AnalyseDegeneracy(info_scan, nullptr, lever, o.degeneracy_ratio);
+    e.degeneracy = deg.ratio;
+    e.num_degenerate = deg.num_degenerate;
+    e.degenerate_directions = deg.directions;
+    e.covariance = (ne.H + 1e-9 * Eigen::Matrix3d::Identity()).inverse() * residual_var;
+    // A jump the gyro or the motion does not explain.
+    const bool rotation_jump =
+        e.gyro_used && std::abs(e.gyro_error_rad) > DegToRad(o.max_rotation_jump_deg);
+    const bool translation_jump =
+        (solved.translation() - predicted.translation()).norm() > o.max_translation_jump;
+    if (rotation_jump || translation_jump) return finish_failed(EstimateStatus::kUnexplainedJump);
+  }
 
-  e.status = e.degeneracy < o.degeneracy_ratio ? EstimateStatus::kDegenerate : EstimateStatus::kOk;
+  e.status = e.num_degenerate > 0 ? EstimateStatus::kDegenerate : EstimateStatus::kOk;
   e.T_world_base = solved;
   m.consecutive_failures = 0;
+  m.pose_cov = informative ? e.covariance : Eigen::Matrix3d::Zero();
 
   // Velocity for the next prediction.
   if (dt > 1e-6) {

@@ -40,6 +40,8 @@
 #include <string>
 #include <vector>
 
+#include "ifab/base/estimator/estimate.h"
+#include "ifab/base/estimator/motion_prior.h"
 #include "ifab/core/config.h"
 #include "ifab/core/se2.h"
 #include "ifab/msgs/msgs.h"
@@ -155,46 +157,36 @@ struct EstimatorOptions {
   double degeneracy_ratio{0.02};     ///< min/max eigenvalue of the (scaled) information below: degenerate
   double max_rotation_jump_deg{5.0}; ///< [deg] match disagrees with the gyro by more: failed
   double max_translation_jump{0.3};  ///< [m] match farther from the prediction: failed
-  int reseed_after_failures{5};      ///< this many failures in a row restart the references (0: never)
+  /// This many scans in a row with too few matched points (the robot left the mapped area)
+  /// restart the references from the prior's pose (0: never). Gate rejections do not: the
+  /// prior's covariance grows with every flagged scan until a good match fits again.
+  int reseed_after_failures{5};
+  /// Score check: of the matched points, at least this fraction must have their nearest
+  /// reference point within 2 sigma (kernel >= exp(-1)), else kPoorScore. 0: off.
+  double min_inlier_fraction{0.0};
+  /// Mahalanobis gate (only with an informative motion prior, e.g. the odometry factor): the
+  /// match is flagged when its innovation from the prior, over the directions the scan
+  /// constrains, exceeds the chi-square quantile of this probability (their combined
+  /// covariance: the match's inverse information and the prior's). 0: off.
+  double gate_probability{0.999};
+  /// The gate tests the translation only (heading marginalised out, 2 dof): a laser line's
+  /// odometry heading may lag the scan on fast turns, so the heading innovation is not a
+  /// sign of a wrong match there; a match sliding along a corridor shows in the translation.
+  bool gate_translation_only{false};
+  /// With an informative prior: the prior alone decides the directions the scan constrains
+  /// less than the prior does (Zhang et al.'s solution remapping, see degeneracy.h).
+  bool remap_degenerate{true};
+  /// Identify the scale of the motion measurement's covariance from the log itself: over the
+  /// last this many matches (that passed coverage and score), the median of the squared
+  /// Mahalanobis distance per direction, times the scale it was computed with, over the
+  /// chi-square median: the scale that makes the innovations consistent (never below 1: the
+  /// given noise model is the least a caller claims). 0: the covariance as given.
+  int prior_scale_window{0};
 
   /// Read the fields a YAML map names (unknown keys are rejected); defaults stay otherwise.
   static EstimatorOptions FromConfig(const ConfigNode& node);
   /// Empty if valid, else what is wrong.
   std::string Validate() const;
-};
-
-/// Outcome of one scan.
-enum class EstimateStatus {
-  kOk,                ///< matched; pose and covariance usable
-  kDegenerate,        ///< matched, but the geometry leaves a direction unconstrained (see cov)
-  kReference,         ///< first scan after Reset: taken as reference, pose = the reset pose
-  kTooFewPoints,      ///< too few valid points (or matched points): pose is the prediction
-  kUnexplainedJump,   ///< the match jumps in a way the gyro/motion does not explain: prediction
-  kSolverFailed,      ///< the solver returned no usable answer: prediction
-};
-const char* StatusName(EstimateStatus status);
-
-/// The estimate for one scan.
-struct BaseEstimate {
-  Seconds t{0.0};                  ///< the scan's middle time
-  Pose2 T_world_base;              ///< estimated pose (the prediction when the match failed)
-  Eigen::Matrix3d covariance{Eigen::Matrix3d::Identity()};  ///< of (x, y, theta) [m^2, rad^2]
-  EstimateStatus status{EstimateStatus::kReference};
-  int num_points{0};               ///< measurement points used
-  double matched_fraction{0.0};    ///< of those, with a reference point within the radius
-  double score{0.0};               ///< mean over points of eq. 1's e_mi (kernels of peak 1)
-  double gyro_error_rad{0.0};      ///< E_G of eq. 2 at the solution (0 if no gyro)
-  bool gyro_used{false};           ///< gyro samples covered the interval since the last scan
-  double degeneracy{0.0};          ///< min/max eigenvalue of the (scaled) information matrix
-  int iterations{0};               ///< LM iterations, summed over rounds and sigma levels
-  double cost{0.0};                ///< final cost of eq. 3 (sum of squares / 2)
-  bool keyframe_added{false};      ///< this scan joined the reference set
-
-  /// Ok or degenerate: the pose came from a match.
-  bool IsUsable() const {
-    return status == EstimateStatus::kOk || status == EstimateStatus::kDegenerate ||
-           status == EstimateStatus::kReference;
-  }
 };
 
 class BaseStateEstimator {
@@ -216,10 +208,17 @@ class BaseStateEstimator {
 
   /// Match one scan; returns the estimate (valid until the next call). Throws InputError if the
   /// scan has more beams than Options::max_beams or goes back in time.
-  /// motion_hint, if given, is the base's motion since the previous scan (T_prev_current, e.g.
-  /// from commanded track speeds or wheel odometry); it only seeds the initial guess (its
-  /// rotation too when no gyro covers the interval) and is not part of eq. 3.
-  const BaseEstimate& AddScan(const LaserScan& scan, const std::optional<Pose2>& motion_hint = {});
+  /// motion, if given, is the base's motion since the previous scan (T_prev_current, e.g. from
+  /// wheel odometry or commanded track speeds). With a covariance it is a factor of eq. 3 (the
+  /// odometry factor, see motion_prior.h) and the prior of the Mahalanobis gate and of the
+  /// degenerate directions; without, it only seeds the initial guess (its rotation too when no
+  /// gyro covers the interval).
+  const BaseEstimate& AddScan(const LaserScan& scan,
+                              const std::optional<MotionMeasurement>& motion = {});
+  /// The motion as an initial guess only (no covariance).
+  const BaseEstimate& AddScan(const LaserScan& scan, const Pose2& motion_hint) {
+    return AddScan(scan, MotionMeasurement{motion_hint, Eigen::Matrix3d::Zero()});
+  }
 
   /// The latest estimate.
   const BaseEstimate& Latest() const { return latest_; }

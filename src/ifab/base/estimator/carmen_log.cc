@@ -4,6 +4,8 @@
 #include <cmath>
 #include <fstream>
 #include <string_view>
+#include <algorithm>
+#include <map>
 
 #include "ifab/core/angles.h"
 #include "ifab/core/error.h"
@@ -65,6 +67,21 @@ class LineReader {
 
   std::size_t Remaining() const { return tokens_.size() - next_; }
 
+  // After the timestamp a line may carry "hostname logger_timestamp" and nothing else. Any
+  // other leftover means the fields were misread (most often a wrong beam or remission count,
+  // which shifts every field after it): an error, never a silent misread.
+  void ExpectEnd(int declared_count) {
+    const std::size_t left = Remaining();
+    double v = 0.0;
+    if (left == 0) return;
+    if (left == 2 && !ParseDouble(tokens_[next_], &v) && ParseDouble(tokens_[next_ + 1], &v)) return;
+    ThrowInputError(
+        "{}:{}: {} line: expected the line to end after the timestamp (token {}) or to carry "
+        "'hostname logger_timestamp', got {} more token(s) starting '{}': does the line hold the "
+        "{} readings it declares?",
+        file_, line_, tokens_[0], next_, left, tokens_[next_], declared_count);
+  }
+
  private:
   const std::vector<std::string_view>& tokens_;
   const std::string& file_;
@@ -82,6 +99,7 @@ CarmenLog ParseCarmenLog(std::istream& in, const std::string& name, const Carmen
   std::string line;
   std::vector<std::string_view> tokens;
   int line_number = 0;
+  std::string first_laser;
   while (std::getline(in, line)) {
     ++line_number;
     Tokenize(line, &tokens);
@@ -90,6 +108,9 @@ CarmenLog ParseCarmenLog(std::istream& in, const std::string& name, const Carmen
       continue;
     }
     LineReader r(tokens, name, line_number);
+    if (first_laser.empty() && (tokens[0] == "FLASER" || tokens[0] == "ROBOTLASER1")) {
+      first_laser = std::string(tokens[0]);
+    }
     if (tokens[0] == "FLASER") {
       LogScan s;
       s.line = line_number;
@@ -99,6 +120,7 @@ CarmenLog ParseCarmenLog(std::istream& in, const std::string& name, const Carmen
       s.laser_pose = r.Pose("x y theta");
       s.odom = r.Pose("odom_x odom_y odom_theta");
       s.scan.stamp.t = r.Number("timestamp");
+      r.ExpectEnd(n);
       const double fov = DegToRad(options.flaser_fov_deg);
       if (options.flaser_step_deg > 0.0) {
         s.scan.angle_min = DegToRad(options.flaser_first_deg);
@@ -136,6 +158,7 @@ CarmenLog ParseCarmenLog(std::istream& in, const std::string& name, const Carmen
       r.Number("side_safety_dist");
       r.Number("turn_axis");
       s.scan.stamp.t = r.Number("timestamp");
+      r.ExpectEnd(n);
       s.scan.angle_min = start_angle;
       s.scan.angle_increment = resolution;
       s.scan.range_min = options.range_min;
@@ -152,12 +175,94 @@ CarmenLog ParseCarmenLog(std::istream& in, const std::string& name, const Carmen
       r.Number("rv");
       r.Number("accel");
       o.t = r.Number("timestamp");
+      r.ExpectEnd(0);
       log.odometry.push_back(o);
     } else {
       ++log.skipped_lines;
     }
   }
+  log.geometry = DeriveLogGeometry(&log.scans, first_laser);
   return log;
+}
+
+LogGeometry DeriveLogGeometry(std::vector<LogScan>* scans, const std::string& message) {
+  LogGeometry g;
+  g.message = message;
+  if (scans->empty()) return g;
+  // Beam count and angles: the most common count; the angles of its first scan.
+  std::map<std::size_t, int> counts;
+  for (const auto& s : *scans) ++counts[s.scan.size()];
+  const auto most = std::max_element(counts.begin(), counts.end(),
+                                     [](const auto& a, const auto& b) { return a.second < b.second; });
+  g.beams = static_cast<int>(most->first);
+  for (const auto& s : *scans) {
+    if (s.scan.size() != most->first) continue;
+    g.angle_min = s.scan.angle_min;
+    g.resolution = s.scan.angle_increment;
+    break;
+  }
+  g.fov = g.beams > 1 ? (g.beams - 1) * g.resolution : 0.0;
+  // The no-return code: the largest reading, if it repeats at least 10 times and more than 10
+  // times as often as all readings within a metre below it (a real wall at one range does not).
+  double top = 0.0;
+  for (const auto& s : *scans) {
+    for (double r : s.scan.ranges) {
+      if (std::isfinite(r)) top = std::max(top, r);
+    }
+  }
+  long at_top = 0, below_top = 0;
+  for (const auto& s : *scans) {
+    for (double r : s.scan.ranges) {
+      if (!std::isfinite(r)) continue;
+      if (r >= top - 1e-3) {
+        ++at_top;
+      } else if (r >= top - 1.0) {
+        ++below_top;
+      }
+    }
+  }
+  if (top > 0.0 && at_top >= 10 && at_top > 10 * below_top) g.no_return_code = top;
+  // Apply: codes (and readings at or beyond a line's own maximum range) are no returns.
+  for (auto& s : *scans) {
+    for (double& r : s.scan.ranges) {
+      if (!std::isfinite(r)) continue;
+      if ((g.no_return_code > 0.0 && r >= g.no_return_code - 1e-3) || r >= s.scan.range_max) {
+        r = LaserScan::kNoReturn;
+      } else {
+        g.max_range = std::max(g.max_range, r);
+      }
+    }
+  }
+  for (auto& s : *scans) s.scan.range_max = std::min(s.scan.range_max, g.max_range + 1e-3);
+  // Scan rate from the median positive interval.
+  std::vector<double> steps;
+  steps.reserve(scans->size());
+  for (std::size_t k = 1; k < scans->size(); ++k) {
+    const double d = (*scans)[k].scan.stamp.t - (*scans)[k - 1].scan.stamp.t;
+    if (d > 0.0) steps.push_back(d);
+  }
+  if (!steps.empty()) {
+    auto mid = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
+    std::nth_element(steps.begin(), mid, steps.end());
+    g.scan_rate = *mid > 0.0 ? 1.0 / *mid : 0.0;
+  }
+  // The laser's mount: T_robot_laser per line, the median of each component.
+  std::vector<double> xs, ys, ths;
+  for (const auto& s : *scans) {
+    const Pose2 T = s.odom.inverse() * s.laser_pose;
+    xs.push_back(T.x);
+    ys.push_back(T.y);
+    ths.push_back(T.theta);
+  }
+  auto median = [](std::vector<double>& v) {
+    auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+    std::nth_element(v.begin(), mid, v.end());
+    return *mid;
+  };
+  g.T_base_laser = Pose2(median(xs), median(ys), WrapAngle(median(ths)));
+  g.laser_offset_in_log = std::hypot(g.T_base_laser.x, g.T_base_laser.y) > 1e-6 ||
+                          std::abs(g.T_base_laser.theta) > 1e-6;
+  return g;
 }
 
 CarmenLog ReadCarmenLog(const std::string& path, const CarmenReadOptions& options) {

@@ -31,7 +31,7 @@ struct CarmenReadOptions {
   /// the rule above (flaser_first_deg is then required too).
   double flaser_step_deg{0.0};
   double flaser_first_deg{-90.0};  ///< [deg] used with flaser_step_deg
-  double range_max{80.0};        ///< [m] LaserScan::range_max; SICK logs use ~81.9 for "no return"
+  double range_max{1000.0};      ///< [m] LaserScan::range_max cap (the log's own maximum applies below it)
   double range_min{0.0};         ///< [m] LaserScan::range_min
 };
 
@@ -50,12 +50,39 @@ struct LogOdometry {
   int line{0};
 };
 
+/// The laser's geometry as the log itself tells it (see DeriveLogGeometry); nothing here comes
+/// from a config.
+struct LogGeometry {
+  std::string message;        ///< "FLASER" or "ROBOTLASER1" (the first laser message type)
+  int beams{0};               ///< beams per scan (the most common count)
+  double fov{0.0};            ///< [rad] field of view: (beams - 1) * resolution
+  double angle_min{0.0};      ///< [rad] first beam
+  double resolution{0.0};     ///< [rad] angle between beams
+  /// [m] the no-return code: a reading this large repeated far more often than any reading
+  /// within a metre below it (SICK: 81.83 / 81.91 in 80 m mode, 50.00 in some drivers; CARMEN
+  /// writes max_range for no return). 0 if none was found. Such readings are set to NaN.
+  double no_return_code{0.0};
+  double max_range{0.0};      ///< [m] the largest real return (below the code)
+  double scan_rate{0.0};      ///< [Hz] from the median interval between scan stamps
+  /// The laser's mount on the robot: T_robot_laser from each line's laser pose and robot pose
+  /// (the median over the lines; identity when the log does not distinguish them).
+  Pose2 T_base_laser;
+  bool laser_offset_in_log{false};  ///< the laser and robot poses of the lines differ
+};
+
+
 struct CarmenLog {
   std::string file;
+  LogGeometry geometry;                ///< from the log alone (DeriveLogGeometry)
   std::vector<LogScan> scans;          ///< in file order
   std::vector<LogOdometry> odometry;   ///< ODOM lines, in file order
   int skipped_lines{0};                ///< comments, empty lines and other message types
 };
+
+/// Derive the geometry from the scans and apply it to them: readings at the no-return code
+/// become NaN and every scan's range_max becomes the largest real return. Called by the
+/// readers below.
+LogGeometry DeriveLogGeometry(std::vector<LogScan>* scans, const std::string& message);
 
 /// Read a CARMEN log; throws InputError if the file cannot be opened or a line is broken.
 CarmenLog ReadCarmenLog(const std::string& path, const CarmenReadOptions& options = {});

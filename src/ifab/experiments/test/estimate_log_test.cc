@@ -1,4 +1,4 @@
-#include "ifab/base/estimator/estimate_log.h"
+#include "ifab/experiments/estimate_log.h"
 
 #include <gtest/gtest.h>
 
@@ -7,7 +7,7 @@
 
 #include "ifab/core/angles.h"
 
-namespace ifab::base {
+namespace ifab::experiments {
 namespace {
 
 TEST(RepairStamps, LateStampsAreInterpolatedAndTheClockIncreases) {
@@ -24,21 +24,6 @@ TEST(RepairStamps, LateStampsAreInterpolatedAndTheClockIncreases) {
   EXPECT_NEAR(t[9], 1.601, 1e-12);  // a repeated stamp is nudged forward
   EXPECT_EQ(repaired, 3);
   EXPECT_EQ(nudged, 1);
-}
-
-TEST(OdometryStalls, FrozenPositionThenJumpIsInterpolated) {
-  std::vector<Pose2> odom{{0.0, 0, 0}, {0.2, 0, 0}, {0.2, 0, 0.01}, {0.2, 0, 0.02}, {0.8, 0, 0.03},
-                          {1.0, 0, 0.04}};
-  int repaired = 0;
-  const auto fixed = RepairOdometryStalls(odom, 0.4, DegToRad(10.0), &repaired);
-  EXPECT_EQ(repaired, 1);
-  EXPECT_NEAR(fixed[2].x, 0.4, 1e-12);
-  EXPECT_NEAR(fixed[3].x, 0.6, 1e-12);
-  EXPECT_NEAR(fixed[3].theta, 0.02, 1e-12) << "the heading was not frozen: kept";
-  // A robot standing still is not a stall.
-  std::vector<Pose2> still{{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0.1, 0, 0}};
-  EXPECT_EQ(RepairOdometryStalls(still, 0.4, DegToRad(10.0), &repaired)[1].x, 0.0);
-  EXPECT_EQ(repaired, 0);
 }
 
 TEST(EvaluateRelations, KuemmerleMetric) {
@@ -66,6 +51,22 @@ TEST(EvaluateRelations, KuemmerleMetric) {
   EXPECT_EQ(e.unmatched, 1);
 }
 
+// false_ok_rate counts a wrong relation only when every scan between its stamps was ok.
+TEST(FalseOkRate, WrongRelationsCountOnlyWhenAllScansBetweenWereOk) {
+  const std::vector<Seconds> stamps{0.0, 1.0, 2.0, 3.0, 10.0};
+  const std::vector<Pose2> poses{{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {3.5, 0, 0}, {4, 0, 0}};
+  const std::vector<char> usable{1, 1, 1, 0, 1};
+  const std::vector<Relation> rel{
+      {0.0, 1.0, {1.0, 0, 0}, 1},   // right
+      {1.0, 2.0, {1.3, 0, 0}, 2},   // 0.3 m wrong, all ok: a false ok
+      {2.0, 3.0, {1.0, 0, 0}, 3},   // 0.5 m wrong, but scan 3 was flagged
+      {0.0, 10.0, {9.0, 0, 0}, 4}}; // longer than 5 s: not counted
+  const FalseOk f = FalseOkRate(stamps, poses, usable, rel, 5.0, 0.2);
+  EXPECT_EQ(f.relations, 3);
+  EXPECT_EQ(f.false_ok, 1);
+  EXPECT_NEAR(f.rate, 1.0 / 3.0, 1e-12);
+}
+
 TEST(ErrorStats, MeanStdMax) {
   const ErrorStats s = ErrorStats::Of({1.0, 2.0, 3.0, 6.0});
   EXPECT_DOUBLE_EQ(s.mean, 3.0);
@@ -79,7 +80,7 @@ TEST(EstimateLog, RunsOnTheSmallLogAndWritesOutputs) {
   const auto m = RunEstimateOnLog(std::string(ESTIMATOR_TEST_DATA) + "/good.clf",
                                   std::string(ESTIMATOR_TEST_DATA) + "/good.relations", {}, out);
   EXPECT_EQ(m["scans"], 3);
-  EXPECT_TRUE(m.contains("rotation_input"));
+  EXPECT_TRUE(m.contains("odometry_input"));
   EXPECT_TRUE(m["short_span"].contains("translation_error_m"));
   EXPECT_TRUE(std::filesystem::exists(out + "/trajectory.csv"));
   EXPECT_TRUE(std::filesystem::exists(out + "/metrics.json"));
@@ -101,4 +102,4 @@ TEST(EstimateLog, MitCsailMeetsThePublishedScanMatchingError) {
 }
 
 }  // namespace
-}  // namespace ifab::base
+}  // namespace ifab::experiments

@@ -3,23 +3,33 @@
 /// Running the base state estimator over a recorded CARMEN log and scoring it against reference
 /// relations with the metric of Kuemmerle et al. 2009: for each relation (t1, t2, delta*),
 /// E = (P(t1)^-1 * P(t2)) * delta*^-1; translational error |t(E)| [m], rotational |angle(E)| [deg].
-/// This is the library side of `ifab estimate LOG [--relations FILE] [--config FILE] --out DIR`.
+/// This is the runner of `ifab estimate LOG [--relations FILE] [--config FILE] --out DIR`; it
+/// lives in experiments/ because it scores against reference data and writes files (the
+/// estimator itself, base/estimator/, does neither).
 ///
-/// CARMEN logs have no gyro. The rotation input of eq. 2 is the wheel odometry's heading change
-/// between consecutive scans, fed to the estimator as one GyroSample per scan (rate = change /
-/// interval); metrics.json says so under "rotation_input". The odometry step also seeds the
-/// initial guess (configurable, see EstimateLogOptions). Where the odometry stalled (the same
-/// pose repeated, then a jump), the jump is replaced by interpolation (see RepairOdometryStalls).
+/// One config for every recorded log (data/estimator/carmen.yaml): what differs between robots
+/// comes from the log (carmen_log.h's LogGeometry: beams, field of view, resolution, no-return
+/// code and maximum range, scan rate, the laser's mount from ROBOTLASER1's laser pose).
+///
+/// The odometry (`log.odometry`):
+///  - `factor` (default): the odometry step since the previous scan is a factor of eq. 3 with
+///    the noise model of motion_prior.h (growing with distance and turn), weighed against the
+///    match by the match's information; it is the prior of the Mahalanobis gate and decides
+///    the directions the scan leaves degenerate. No gyro term (the heading is in the factor).
+///  - `gyro`: the paper's eq. 2 with the odometry's heading change per scan as the gyro (one
+///    rate sample per scan); the odometry step seeds the initial guess only.
+/// A scan whose odometry pose repeats the previous one exactly (x, y and theta) carries no new
+/// odometry (a robot at rest, or an odometry message that did not arrive: MIT CSAIL's freezes
+/// for up to five scans, then jumps 0.9 m). Its prior is the constant-velocity prediction,
+/// with the same noise model applied to that predicted step, and the next scan with new
+/// odometry takes the odometry's motion since the last updated scan.
 ///
 /// Time stamps: a log's stamps may go backwards (intel.clf: 631 times, where a scan's stamp is
 /// late by up to ~0.9 s while the odometry shows the file order is the true order). Scans are
 /// processed in file order on a repaired, increasing clock: a stamp later than any following
 /// stamp is replaced by interpolation between its nearest trustworthy neighbours (by index),
-/// and consecutive scans are kept at least 1 ms apart (intel.clf: 999 stamps interpolated,
-/// 1470 moved by less than 1 ms). The original stamps are kept for the relations (which refer
-/// to them) and are written to the trajectory beside the repaired ones. The repaired clock only
-/// drives the horizon, the gyro interval and the constant-velocity prior; the rotation input is
-/// the odometry's heading change per scan, whatever the stamps.
+/// and consecutive scans are kept at least 1 ms apart. The original stamps are kept for the
+/// relations (which refer to them) and are written to the trajectory beside the repaired ones.
 
 #include <array>
 #include <nlohmann/json.hpp>
@@ -32,22 +42,25 @@
 #include "ifab/base/estimator/carmen_log.h"
 #include "ifab/core/angles.h"
 
-namespace ifab::base {
+namespace ifab::experiments {
+
+using base::CarmenReadOptions;
+using base::EstimatorOptions;
+using base::Relation;
+
+/// How the log's odometry enters (see the file comment).
+enum class LogOdometry { kFactor, kGyro };
 
 /// Everything `ifab estimate` reads from its YAML config.
 struct EstimateLogOptions {
   EstimatorOptions estimator;     ///< section `estimator`
-  CarmenReadOptions reader;       ///< section `log` (flaser_fov_deg, range_max, range_min)
-  Pose2 T_base_laser;             ///< `log.T_base_laser: [x, y, theta_deg]` (identity: laser = base)
+  CarmenReadOptions reader;       ///< section `log`: reader overrides (none needed for CARMEN logs)
+  LogOdometry odometry{LogOdometry::kFactor};  ///< `log.odometry`: factor | gyro
+  base::OdometryNoise odometry_noise;          ///< `log.odometry_noise` (motion_prior.h)
   double short_span{20.0};        ///< [s] relations spanning at most this go under short_span
+  double false_ok_span{5.0};      ///< [s] false_ok_rate looks at relations spanning at most this
+  double false_ok_error{0.2};     ///< [m] ... whose translation error exceeds this
   double stamp_tolerance{1e-3};   ///< [s] a relation's time matches a scan's stamp within this
-  /// A stalled odometry (the same pose over several scans, then a heading jump larger than
-  /// this) has its jump spread evenly over the stalled scans (`log.odometry_stall_jump_deg`).
-  double odometry_stall_jump_rad{DegToRad(10.0)};
-  double odometry_stall_jump_m{0.4};  ///< `log.odometry_stall_jump_m`
-  /// Seed each scan's initial guess with the odometry step (`log.odometry_translation_hint`).
-  /// Only the initial guess: eq. 3 has no odometry term.
-  bool odometry_translation_hint{true};
 
   /// Read a config file of the form {estimator: {...}, log: {...}, evaluation: {...}}.
   static EstimateLogOptions FromConfig(const ConfigNode& node);
@@ -83,12 +96,17 @@ RelationErrors EvaluateRelations(const std::vector<Seconds>& stamps, const std::
 std::vector<Seconds> RepairStamps(const std::vector<Seconds>& stamps, int* interpolated = nullptr,
                                   int* nudged = nullptr);
 
-/// Odometry with stalls repaired: where the position (or the heading) repeats exactly over a
-/// run of scans and then jumps by more than stall_jump_m (stall_jump_rad), the run is replaced
-/// by interpolation up to the sample after the jump. MIT CSAIL's odometry freezes for up to
-/// five scans, then catches up with 0.8-0.9 m steps (4 m/s).
-std::vector<Pose2> RepairOdometryStalls(const std::vector<Pose2>& odom, double stall_jump_m,
-                                        double stall_jump_rad, int* repaired = nullptr);
+/// Among the relations spanning at most max_span, the fraction whose translation error exceeds
+/// max_error while every scan from the one at t1 to the one at t2 (in processing order) was
+/// usable (status ok, degenerate or reference): the estimator claimed ok and was wrong.
+struct FalseOk {
+  int relations{0};  ///< relations spanning at most max_span that were scored
+  int false_ok{0};   ///< of those, wrong while all scans between were ok
+  double rate{0.0};
+};
+FalseOk FalseOkRate(const std::vector<Seconds>& stamps, const std::vector<Pose2>& poses,
+                    const std::vector<char>& usable, const std::vector<Relation>& relations,
+                    double max_span, double max_error, double tolerance = 1e-3);
 
 /// Run the estimator over the log; if out_dir is non-empty write out_dir/trajectory.csv and
 /// out_dir/metrics.json. relations_path may be empty: then "<log without .clf>.relations" is
@@ -97,4 +115,4 @@ std::vector<Pose2> RepairOdometryStalls(const std::vector<Pose2>& odom, double s
 nlohmann::json RunEstimateOnLog(const std::string& log_path, const std::string& relations_path,
                                 const EstimateLogOptions& options, const std::string& out_dir);
 
-}  // namespace ifab::base
+}  // namespace ifab::experiments
