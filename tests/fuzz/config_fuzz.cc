@@ -9,7 +9,7 @@
 #include "ifab/arm/primitives.h"
 #include "ifab/base/controller/trajectory_controller.h"
 #include "ifab/base/estimator/base_state_estimator.h"
-#include "ifab/base/estimator/estimate_log.h"
+#include "ifab/experiments/estimate_log.h"
 #include "ifab/base/planner/planning_scene.h"
 #include "ifab/base/planner/stomp_planner.h"
 #include "ifab/core/config.h"
@@ -33,7 +33,7 @@ const std::map<std::string, Loader>& Loaders() {
   static const std::map<std::string, Loader> loaders = {
       {"base_planner", [](const ConfigNode& c) { (void)b::StompPlannerOptions::FromConfig(c); }},
       {"estimator", [](const ConfigNode& c) { (void)b::EstimatorOptions::FromConfig(c); }},
-      {"estimate_log", [](const ConfigNode& c) { (void)b::EstimateLogOptions::FromConfig(c); }},
+      {"estimate_log", [](const ConfigNode& c) { (void)ifab::experiments::EstimateLogOptions::FromConfig(c); }},
       {"base_controller", [](const ConfigNode& c) { (void)b::BaseControllerOptions::FromConfig(c); }},
       {"base", [](const ConfigNode& c) { (void)b::BaseGeometry::FromConfig(c); }},
       {"arm", [](const ConfigNode& c) { (void)ifab::arm::ArmOptions::FromConfig(c); }},
