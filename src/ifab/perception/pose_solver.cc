@@ -1,6 +1,6 @@
 #include "ifab/perception/pose_solver.h"
 
-#include <ceres/ceres.h>
+#include <ceres/jet.h>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
@@ -15,6 +15,7 @@
 #include <memory>
 
 #include "ifab/core/error.h"
+#include "ifab/perception/dense_lm.h"
 #include "ifab/perception/residuals.h"
 
 namespace ifab::internal {
@@ -22,7 +23,9 @@ namespace {
 
 using Params = std::array<double, 6>;  // [t, w] about R0
 
-constexpr int kChunk = 256;  // points per Ceres residual block
+constexpr std::size_t kChunk = 256;  // points per unit of (parallel) evaluation
+
+using Vector6 = Eigen::Matrix<double, 6, 1>;
 
 Pose3 ApplyParams(const Params& x, const Eigen::Matrix3d& R0) {
   Pose3 T = Pose3::Identity();
@@ -33,142 +36,89 @@ Pose3 ApplyParams(const Params& x, const Eigen::Matrix3d& R0) {
 
 Params ParamsAt(const Pose3& T) { return {T.translation().x(), T.translation().y(), T.translation().z(), 0, 0, 0}; }
 
-// Points of one body (registration): residuals of a fixed p_base against the body pose.
-class RegistrationChunk final : public ceres::CostFunction {
- public:
-  RegistrationChunk(const Scene& scene, const Eigen::Matrix3d& R0, std::vector<RayT<double>> points,
-                    std::vector<const PointMatch*> matches)
-      : scene_(scene), R0_(R0), points_(std::move(points)), matches_(std::move(matches)) {
-    int n = 0;
-    for (const auto* m : matches_) n += m->NumResiduals();
-    set_num_residuals(n);
-    mutable_parameter_block_sizes()->push_back(6);
-  }
-
-  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
-    const PoseJacobianData X(parameters[0], R0_);
-    double* J = jacobians ? jacobians[0] : nullptr;
-    int row = 0;
-    for (std::size_t i = 0; i < points_.size(); ++i) {
-      const PointMatch& m = *matches_[i];
-      const ScenePrimitive* prim = m.primitive >= 0 ? &scene_.primitives()[static_cast<std::size_t>(m.primitive)] : nullptr;
-      row += PointResidualAnalytic(m, prim, points_[i], X, residuals + row, J ? J + row * 6 : nullptr);
-    }
-    return true;
-  }
-
- private:
-  const Scene& scene_;
-  Eigen::Matrix3d R0_;
-  std::vector<RayT<double>> points_;
-  std::vector<const PointMatch*> matches_;
+// Up to 3 residuals of one point and their Jacobian rows (row-major n x 6) with respect to the
+// laser mount (calibration) and the point's body.
+struct PointTerms {
+  int n{0};
+  double r[3];
+  Eigen::Matrix<double, 3, 6, Eigen::RowMajor> J_laser, J_body;
 };
 
-// Points of one body (calibration): eq. 6 inside eq. 7, the mount and the body pose both free.
-class CalibrationChunk final : public ceres::CostFunction {
- public:
-  CalibrationChunk(const Scene& scene, const Eigen::Matrix3d& R0_laser, const Eigen::Matrix3d& R0_body,
-                   std::vector<const SweepPoint*> points, std::vector<const PointMatch*> matches, bool autodiff)
-      : scene_(scene), R0_laser_(R0_laser), R0_body_(R0_body), points_(std::move(points)), matches_(std::move(matches)),
-        autodiff_(autodiff) {
-    int n = 0;
-    for (const auto* m : matches_) n += m->NumResiduals();
-    set_num_residuals(n);
-    mutable_parameter_block_sizes()->push_back(6);
-    mutable_parameter_block_sizes()->push_back(6);
-  }
+// Registration: a fixed ray p_base against the body pose.
+void RegistrationTerms(const PointMatch& m, const ScenePrimitive* prim, const RayT<double>& ray,
+                       const PoseJacobianData& XB, bool jacobians, PointTerms& out) {
+  out.n = PointResidualAnalytic(m, prim, ray, XB, out.r, jacobians ? out.J_body.data() : nullptr);
+}
 
-  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
-    const bool want = jacobians && (jacobians[0] || jacobians[1]);
-    if (!autodiff_) return EvaluateAnalytic(parameters, residuals, want ? jacobians : nullptr);
-    const double* xl = parameters[0];
-    const double* xb = parameters[1];
-    using J = ceres::Jet<double, 12>;
-    J xlj[6], xbj[6];
-    for (int k = 0; k < 6; ++k) {
-      xlj[k] = J(xl[k], k);
-      xbj[k] = J(xb[k], 6 + k);
+// Calibration: eq. 6 inside eq. 7, the mount and the body pose both free. Hand-derived Jacobians
+// (residuals.h, checked against autodiff) or Ceres autodiff through the templated residuals.
+void CalibrationTerms(const PointMatch& m, const ScenePrimitive* prim, const SweepPoint& s, const PoseJacobianData& XL,
+                      const PoseJacobianData& XB, bool jacobians, PointTerms& out) {
+  using Row3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+  const LaserRayJacobian lr = LaserRayWithJacobian(XL, s.T_base_tool0, s.p_laser);
+  RayJacobian rj;
+  out.n = PointResidualAnalytic(m, prim, lr.ray, XB, out.r, jacobians ? out.J_body.data() : nullptr,
+                                jacobians ? &rj : nullptr);
+  if (jacobians && out.n > 0)
+    out.J_laser.topRows(out.n) = Eigen::Map<const Row3>(rj.d_origin, out.n, 3) * lr.d_origin +
+                                 Eigen::Map<const Row3>(rj.d_direction, out.n, 3) * lr.d_direction;
+}
+
+void CalibrationTermsAutodiff(const PointMatch& m, const ScenePrimitive* prim, const SweepPoint& s,
+                              const double* xl, const Eigen::Matrix3d& R0_laser, const double* xb,
+                              const Eigen::Matrix3d& R0_body, bool jacobians, PointTerms& out) {
+  if (!jacobians) {
+    const PoseT<double> XL(xl, R0_laser), XB(xb, R0_body);
+    out.n = PointResidual<double>(m, prim, LaserRay<double>(XL, s.T_base_tool0, s.p_laser), XB, out.r);
+    return;
+  }
+  using J = ceres::Jet<double, 12>;
+  J xlj[6], xbj[6];
+  for (int k = 0; k < 6; ++k) {
+    xlj[k] = J(xl[k], k);
+    xbj[k] = J(xb[k], 6 + k);
+  }
+  const PoseT<J> XLj(xlj, R0_laser), XBj(xbj, R0_body);
+  J r[3];
+  out.n = PointResidual<J>(m, prim, LaserRay<J>(XLj, s.T_base_tool0, s.p_laser), XBj, r);
+  for (int k = 0; k < out.n; ++k) {
+    out.r[k] = r[k].a;
+    for (int c = 0; c < 6; ++c) {
+      out.J_laser(k, c) = r[k].v[c];
+      out.J_body(k, c) = r[k].v[6 + c];
     }
-    const PoseT<J> XLj(xlj, R0_laser_), XBj(xbj, R0_body_);
-    const PoseT<double> XL(xl, R0_laser_), XB(xb, R0_body_);
-    int row = 0;
-    for (std::size_t i = 0; i < points_.size(); ++i) {
-      const PointMatch& m = *matches_[i];
-      const SweepPoint& s = *points_[i];
-      const ScenePrimitive* prim = m.primitive >= 0 ? &scene_.primitives()[static_cast<std::size_t>(m.primitive)] : nullptr;
-      if (want) {
-        const RayT<J> ray = LaserRay<J>(XLj, s.T_base_tool0, s.p_laser);
-        J r[3];
-        const int n = PointResidual<J>(m, prim, ray, XBj, r);
-        for (int k = 0; k < n; ++k) {
-          residuals[row + k] = r[k].a;
-          if (jacobians[0])
-            for (int c = 0; c < 6; ++c) jacobians[0][(row + k) * 6 + c] = r[k].v[c];
-          if (jacobians[1])
-            for (int c = 0; c < 6; ++c) jacobians[1][(row + k) * 6 + c] = r[k].v[6 + c];
-        }
-        row += n;
-      } else {
-        const RayT<double> ray = LaserRay<double>(XL, s.T_base_tool0, s.p_laser);
-        row += PointResidual<double>(m, prim, ray, XB, residuals + row);
+  }
+}
+
+// Sums over a run of points of one body: 0.5 |r|^2, J^T J and J^T r by block.
+struct BodyAccumulator {
+  double cost{0.0};
+  Matrix6d H_body{Matrix6d::Zero()}, H_laser{Matrix6d::Zero()}, H_laser_body{Matrix6d::Zero()};
+  Vector6 g_body{Vector6::Zero()}, g_laser{Vector6::Zero()};
+
+  void Add(const PointTerms& t, bool jacobians, bool laser) {
+    for (int k = 0; k < t.n; ++k) {
+      cost += 0.5 * t.r[k] * t.r[k];
+      if (!jacobians) continue;
+      const Vector6 jb = t.J_body.row(k).transpose();
+      H_body.noalias() += jb * jb.transpose();
+      g_body += t.r[k] * jb;
+      if (laser) {
+        const Vector6 jl = t.J_laser.row(k).transpose();
+        H_laser.noalias() += jl * jl.transpose();
+        H_laser_body.noalias() += jl * jb.transpose();
+        g_laser += t.r[k] * jl;
       }
     }
-    return true;
   }
-
- private:
-  // The same residuals with hand-derived Jacobians (residuals.h), checked against autodiff.
-  bool EvaluateAnalytic(double const* const* parameters, double* residuals, double** jacobians) const {
-    const PoseJacobianData XL(parameters[0], R0_laser_), XB(parameters[1], R0_body_);
-    using Row6 = Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor>;
-    using Row3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
-    int row = 0;
-    for (std::size_t i = 0; i < points_.size(); ++i) {
-      const PointMatch& m = *matches_[i];
-      const SweepPoint& s = *points_[i];
-      const ScenePrimitive* prim = m.primitive >= 0 ? &scene_.primitives()[static_cast<std::size_t>(m.primitive)] : nullptr;
-      const LaserRayJacobian lr = LaserRayWithJacobian(XL, s.T_base_tool0, s.p_laser);
-      RayJacobian rj;
-      double* jb = jacobians && jacobians[1] ? jacobians[1] + row * 6 : nullptr;
-      const int n = PointResidualAnalytic(m, prim, lr.ray, XB, residuals + row, jb, jacobians ? &rj : nullptr);
-      if (jacobians && jacobians[0]) {
-        Eigen::Map<Row6>(jacobians[0] + row * 6, n, 6) =
-            Eigen::Map<const Row3>(rj.d_origin, n, 3) * lr.d_origin + Eigen::Map<const Row3>(rj.d_direction, n, 3) * lr.d_direction;
-      }
-      row += n;
-    }
-    return true;
+  void Add(const BodyAccumulator& o) {
+    cost += o.cost;
+    H_body += o.H_body;
+    H_laser += o.H_laser;
+    H_laser_body += o.H_laser_body;
+    g_body += o.g_body;
+    g_laser += o.g_laser;
   }
-
-  const Scene& scene_;
-  Eigen::Matrix3d R0_laser_, R0_body_;
-  std::vector<const SweepPoint*> points_;
-  std::vector<const PointMatch*> matches_;
-  bool autodiff_{false};
-};
-
-// Damping of one step: (x - x_start) / sigma. Re-centred every step, so it holds directions the
-// data leave free without pulling the others (the data's information is many orders larger).
-class StepPrior final : public ceres::SizedCostFunction<6, 6> {
- public:
-  StepPrior(const Params& start, double sigma_t, double sigma_r) : start_(start) {
-    for (int k = 0; k < 3; ++k) {
-      w_[k] = 1.0 / sigma_t;
-      w_[3 + k] = 1.0 / sigma_r;
-    }
-  }
-  bool Evaluate(double const* const* p, double* r, double** j) const override {
-    for (int k = 0; k < 6; ++k) r[k] = (p[0][k] - start_[static_cast<std::size_t>(k)]) * w_[k];
-    if (j && j[0]) {
-      for (int k = 0; k < 36; ++k) j[0][k] = 0.0;
-      for (int k = 0; k < 6; ++k) j[0][k * 6 + k] = w_[k];
-    }
-    return true;
-  }
-
- private:
-  Params start_;
-  double w_[6];
 };
 
 double RobustWeight(RobustLoss loss, double scale, double whitened) {
@@ -447,106 +397,191 @@ class Engine {
     return n;
   }
 
-  // The parameter blocks and cost functions of the current matches.
-  struct Built {
-    std::unique_ptr<ceres::Problem> problem;
-    std::vector<Params> x;
-    Params x_laser{};
+  // The least-squares problem of one correspondence step: the informative points grouped by body,
+  // and the free parameter blocks (6 each: the laser first when calibrating, then the free bodies).
+  struct StepProblem {
+    std::vector<Params> x0;  // every body at the step's start ([t, 0] about R0)
+    Params x0_laser{};
     std::vector<Eigen::Matrix3d> R0;
     Eigen::Matrix3d R0_laser{Eigen::Matrix3d::Identity()};
-    std::vector<double*> free_blocks;  // laser first (calibration), then free bodies in order
-    std::vector<int> block_body;       // -1: the laser
+    std::vector<std::vector<std::size_t>> points;  // per body: its informative points
+    std::vector<std::vector<RayT<double>>> rays;   // registration: their rays
+    struct Chunk {
+      std::size_t body, begin, end;
+    };
+    std::vector<Chunk> chunks;
+    int laser_block{-1};          // offset of the laser's block in x, -1 held
+    std::vector<int> body_block;  // per body: offset of its block in x, -1 held
+    std::vector<int> block_body;  // per block: its body, -1 the laser
+    int num_parameters{0};
     int num_residuals{0};
+    bool priors{false};  // damp the step: (x - x0) / step sigma per free block
+
+    Eigen::VectorXd Start() const {
+      Eigen::VectorXd x(num_parameters);
+      if (laser_block >= 0) x.segment<6>(laser_block) = Eigen::Map<const Vector6>(x0_laser.data());
+      for (std::size_t k = 0; k < x0.size(); ++k)
+        if (body_block[k] >= 0) x.segment<6>(body_block[k]) = Eigen::Map<const Vector6>(x0[k].data());
+      return x;
+    }
+    Params Laser(const Eigen::VectorXd& x) const { return laser_block < 0 ? x0_laser : Block(x, laser_block); }
+    Params Body(const Eigen::VectorXd& x, std::size_t k) const {
+      return body_block[k] < 0 ? x0[k] : Block(x, body_block[k]);
+    }
+    static Params Block(const Eigen::VectorXd& x, int offset) {
+      Params p;
+      for (int c = 0; c < 6; ++c) p[static_cast<std::size_t>(c)] = x[offset + c];
+      return p;
+    }
   };
 
   // stride: every stride-th informative point (coarse steps); the information uses all.
-  Built Build(bool with_priors, int stride = 1) {
-    Built b;
-    ceres::Problem::Options po;
-    po.cost_function_ownership = ceres::TAKE_OWNERSHIP;
-    b.problem = std::make_unique<ceres::Problem>(po);
-    b.x.resize(poses_.size());
-    b.R0.resize(poses_.size());
+  StepProblem MakeStepProblem(bool with_priors, int stride = 1) const {
+    StepProblem p;
+    p.priors = with_priors;
+    p.x0.resize(poses_.size());
+    p.R0.resize(poses_.size());
     for (std::size_t k = 0; k < poses_.size(); ++k) {
-      b.x[k] = ParamsAt(poses_[k]);
-      b.R0[k] = poses_[k].linear();
+      p.x0[k] = ParamsAt(poses_[k]);
+      p.R0[k] = poses_[k].linear();
     }
-    b.x_laser = ParamsAt(laser_);
-    b.R0_laser = laser_.linear();
-
-    // Group the informative points by body, in chunks.
-    std::vector<std::vector<std::size_t>> by_body(poses_.size());
-    for (std::size_t i = 0; i < matches_.size(); i += static_cast<std::size_t>(stride))
-      if (labels_[i] == PointLabel::kInlier) by_body[static_cast<std::size_t>(matches_[i].body)].push_back(i);
-
-    for (std::size_t k = 0; k < poses_.size(); ++k) {
-      const auto& idx = by_body[k];
-      for (std::size_t c = 0; c < idx.size(); c += kChunk) {
-        const std::size_t end = std::min(idx.size(), c + kChunk);
-        std::vector<const PointMatch*> ms;
-        for (std::size_t j = c; j < end; ++j) {
-          ms.push_back(&matches_[idx[j]]);
-          b.num_residuals += matches_[idx[j]].NumResiduals();
-        }
-        if (calibrating_) {
-          std::vector<const SweepPoint*> ps;
-          for (std::size_t j = c; j < end; ++j) ps.push_back(&(*input_.sweep)[idx[j]]);
-          b.problem->AddResidualBlock(new CalibrationChunk(scene_, b.R0_laser, b.R0[k], std::move(ps), std::move(ms),
-                                                           input_.autodiff),
-                                      nullptr, b.x_laser.data(), b.x[k].data());
-        } else {
-          std::vector<RayT<double>> ps;
-          for (std::size_t j = c; j < end; ++j) {
-            const RayPoint& rp = (*input_.cloud)[idx[j]];
-            const double range = rp.Range();
-            ps.push_back({rp.origin, (rp.p - rp.origin) / range, range});
-          }
-          b.problem->AddResidualBlock(new RegistrationChunk(scene_, b.R0[k], std::move(ps), std::move(ms)), nullptr,
-                                      b.x[k].data());
-        }
+    p.x0_laser = ParamsAt(laser_);
+    p.R0_laser = laser_.linear();
+    p.points.resize(poses_.size());
+    p.rays.resize(poses_.size());
+    for (std::size_t i = 0; i < matches_.size(); i += static_cast<std::size_t>(stride)) {
+      if (labels_[i] != PointLabel::kInlier) continue;
+      const auto k = static_cast<std::size_t>(matches_[i].body);
+      p.points[k].push_back(i);
+      p.num_residuals += matches_[i].NumResiduals();
+      if (!calibrating_) {
+        const RayPoint& rp = (*input_.cloud)[i];
+        const double range = rp.Range();
+        p.rays[k].push_back({rp.origin, (rp.p - rp.origin) / range, range});
       }
     }
-    auto add_block = [&](double* block, int body) {
-      if (!b.problem->HasParameterBlock(block)) b.problem->AddParameterBlock(block, 6);
-      b.free_blocks.push_back(block);
-      b.block_body.push_back(body);
-      if (with_priors) {
-        Params start;
-        std::copy(block, block + 6, start.begin());
-        b.problem->AddResidualBlock(
-            new StepPrior(start, options_.step_sigma_translation, options_.step_sigma_rotation), nullptr, block);
+    for (std::size_t k = 0; k < poses_.size(); ++k)
+      for (std::size_t c = 0; c < p.points[k].size(); c += kChunk)
+        p.chunks.push_back({k, c, std::min(p.points[k].size(), c + kChunk)});
+    if (calibrating_) {
+      p.laser_block = p.num_parameters;
+      p.block_body.push_back(-1);
+      p.num_parameters += 6;
+    }
+    p.body_block.assign(poses_.size(), -1);
+    for (std::size_t k = 0; k < poses_.size(); ++k) {
+      if (!bodies_[k].free) continue;
+      p.body_block[k] = p.num_parameters;
+      p.block_body.push_back(static_cast<int>(k));
+      p.num_parameters += 6;
+    }
+    return p;
+  }
+
+  // 0.5 |r(x)|^2 of the step problem and, when H and g are given (sized and zeroed), J^T J and
+  // J^T r over its free blocks, accumulated point by point (the Jacobian is never stored). Chunks
+  // are summed in a fixed order, so the result does not depend on the number of threads.
+  bool Evaluate(const StepProblem& p, const Eigen::VectorXd& x, double* cost, Eigen::MatrixXd* H, Eigen::VectorXd* g) const {
+    const bool jacobians = H != nullptr;
+    const Params xl = p.Laser(x);
+    const PoseJacobianData XL(xl.data(), p.R0_laser);
+    std::vector<Params> xb(poses_.size());
+    std::vector<PoseJacobianData> XB;
+    XB.reserve(poses_.size());
+    for (std::size_t k = 0; k < poses_.size(); ++k) {
+      xb[k] = p.Body(x, k);
+      XB.emplace_back(xb[k].data(), p.R0[k]);
+    }
+    const bool laser_free = p.laser_block >= 0;
+    std::vector<BodyAccumulator> sums(p.chunks.size());
+    auto run = [&](std::size_t c) {
+      const auto& chunk = p.chunks[c];
+      const std::size_t k = chunk.body;
+      BodyAccumulator& acc = sums[c];
+      PointTerms t;
+      for (std::size_t j = chunk.begin; j < chunk.end; ++j) {
+        const std::size_t i = p.points[k][j];
+        const PointMatch& m = matches_[i];
+        const ScenePrimitive* prim = m.primitive >= 0 ? &scene_.primitives()[static_cast<std::size_t>(m.primitive)] : nullptr;
+        if (!calibrating_) {
+          RegistrationTerms(m, prim, p.rays[k][j], XB[k], jacobians, t);
+        } else if (input_.autodiff) {
+          CalibrationTermsAutodiff(m, prim, (*input_.sweep)[i], xl.data(), p.R0_laser, xb[k].data(), p.R0[k], jacobians, t);
+        } else {
+          CalibrationTerms(m, prim, (*input_.sweep)[i], XL, XB[k], jacobians, t);
+        }
+        acc.Add(t, jacobians, laser_free);
       }
     };
-    if (calibrating_) add_block(b.x_laser.data(), -1);
+    if (options_.num_threads > 1 && p.chunks.size() > 1) {
+      tbb::task_arena arena(options_.num_threads);
+      arena.execute([&] {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, p.chunks.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+          for (std::size_t c = r.begin(); c != r.end(); ++c) run(c);
+        });
+      });
+    } else {
+      for (std::size_t c = 0; c < p.chunks.size(); ++c) run(c);
+    }
+    std::vector<BodyAccumulator> body_sums(poses_.size());
+    for (std::size_t c = 0; c < p.chunks.size(); ++c) body_sums[p.chunks[c].body].Add(sums[c]);
+    *cost = 0.0;
     for (std::size_t k = 0; k < poses_.size(); ++k) {
-      if (bodies_[k].free) {
-        add_block(b.x[k].data(), static_cast<int>(k));
-      } else if (b.problem->HasParameterBlock(b.x[k].data())) {
-        b.problem->SetParameterBlockConstant(b.x[k].data());
+      const BodyAccumulator& a = body_sums[k];
+      *cost += a.cost;
+      if (!jacobians) continue;
+      const int ob = p.body_block[k], ol = p.laser_block;
+      if (ob >= 0) {
+        H->block<6, 6>(ob, ob) += a.H_body;
+        g->segment<6>(ob) += a.g_body;
+      }
+      if (ol >= 0) {
+        H->block<6, 6>(ol, ol) += a.H_laser;
+        g->segment<6>(ol) += a.g_laser;
+        if (ob >= 0) {
+          H->block<6, 6>(ol, ob) += a.H_laser_body;
+          H->block<6, 6>(ob, ol) += a.H_laser_body.transpose();
+        }
       }
     }
-    return b;
+    if (p.priors) {
+      // Damping of one step: (x - x_start) / sigma. Re-centred every step, so it holds directions
+      // the data leave free without pulling the others (the data's information is many orders larger).
+      const Eigen::VectorXd d = x - p.Start();
+      for (int c = 0; c < p.num_parameters; ++c) {
+        const double sigma = c % 6 < 3 ? options_.step_sigma_translation : options_.step_sigma_rotation;
+        const double w2 = 1.0 / (sigma * sigma);
+        *cost += 0.5 * w2 * d[c] * d[c];
+        if (jacobians) {
+          (*H)(c, c) += w2;
+          (*g)[c] += w2 * d[c];
+        }
+      }
+    }
+    return std::isfinite(*cost);
   }
 
   StepResult Step() {
     StepResult r;
-    Built b = Build(/*with_priors=*/true, stride_);
-    ceres::Solver::Options so;
-    so.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
-    so.max_num_iterations = options_.max_solver_iterations;
-    so.function_tolerance = 1e-10;
-    so.gradient_tolerance = 1e-14;
-    so.parameter_tolerance = 1e-10;
-    so.num_threads = options_.num_threads;
-    so.logging_type = ceres::SILENT;
-    ceres::Solver::Summary summary;
-    ceres::Solve(so, b.problem.get(), &summary);
-    spdlog::debug("registration step: {}", summary.BriefReport());
-    if (!summary.IsSolutionUsable()) {
+    const StepProblem p = MakeStepProblem(/*with_priors=*/true, stride_);
+    DenseLmOptions lm;
+    lm.max_iterations = options_.max_solver_iterations;
+    Eigen::VectorXd x = p.Start();
+    const DenseLmSummary summary = SolveDenseLm(
+        [&](const Eigen::VectorXd& at, double* cost, Eigen::MatrixXd* H, Eigen::VectorXd* g) {
+          return Evaluate(p, at, cost, H, g);
+        },
+        x, lm);
+    spdlog::debug("registration step: {} ({} iterations, cost {:.6g} -> {:.6g})", summary.message, summary.iterations,
+                  summary.initial_cost, summary.final_cost);
+    if (!summary.usable) {
       r.ok = false;
-      r.message = "Ceres: " + summary.message;
+      r.message = "solver: " + summary.message;
       return r;
     }
+    const Params x_laser = p.Laser(x);
+    std::vector<Params> x_body(poses_.size());
+    for (std::size_t k = 0; k < poses_.size(); ++k) x_body[k] = p.Body(x, k);
     // The solved step as one vector (translations, rotations at a 0.1 m lever). When it turns
     // back on the previous one, the face assignments are flipping between two states: take only
     // a fraction of it (halved at every reversal), so the iteration settles between them.
@@ -558,11 +593,11 @@ class Engine {
         solved.push_back(laser ? laser_ : poses_[k]);
         continue;
       }
-      const Params& x = laser ? b.x_laser : b.x[k];
+      const Params& xs = laser ? x_laser : x_body[k];
       const Pose3& before = laser ? laser_ : poses_[k];
-      solved.push_back(ApplyParams(x, laser ? b.R0_laser : b.R0[k]));
+      solved.push_back(ApplyParams(xs, laser ? p.R0_laser : p.R0[k]));
       delta.segment<3>(6 * static_cast<Eigen::Index>(k)) = solved.back().translation() - before.translation();
-      delta.segment<3>(6 * static_cast<Eigen::Index>(k) + 3) = 0.1 * Eigen::Vector3d(x[3], x[4], x[5]);
+      delta.segment<3>(6 * static_cast<Eigen::Index>(k) + 3) = 0.1 * Eigen::Vector3d(xs[3], xs[4], xs[5]);
     }
     if (previous_delta_.size() == delta.size() && delta.dot(previous_delta_) < -0.3 * delta.norm() * previous_delta_.norm())
       relaxation_ = std::max(relaxation_ / 2.0, 1.0 / 64.0);
@@ -616,32 +651,15 @@ class Engine {
   // Cost, covariance and unconstrained directions at the final poses from J^T J.
   void Information(PoseProblemOutput& out) {
     RegistrationSummary& s = out.summary;
-    Built b = Build(/*with_priors=*/false);
-    ceres::Problem::EvaluateOptions eo;
-    eo.parameter_blocks = b.free_blocks;
-    eo.apply_loss_function = false;
-    double cost = 0.0;
-    ceres::CRSMatrix crs;
-    if (b.free_blocks.empty()) {
-      b.problem->Evaluate(ceres::Problem::EvaluateOptions(), &cost, nullptr, nullptr, nullptr);
-    } else {
-      b.problem->Evaluate(eo, &cost, nullptr, nullptr, &crs);
-    }
-    s.cost = cost;
-    s.rms_whitened = b.num_residuals > 0 ? std::sqrt(2.0 * cost / b.num_residuals) : 0.0;
-    if (b.free_blocks.empty()) return;
-    const int n = static_cast<int>(b.free_blocks.size()) * 6;
+    const StepProblem p = MakeStepProblem(/*with_priors=*/false);
+    const int n = p.num_parameters;
     Eigen::MatrixXd H = Eigen::MatrixXd::Zero(n, n);
-    for (int row = 0; row < crs.num_rows; ++row) {
-      for (int a = crs.rows[static_cast<std::size_t>(row)]; a < crs.rows[static_cast<std::size_t>(row) + 1]; ++a) {
-        for (int c = a; c < crs.rows[static_cast<std::size_t>(row) + 1]; ++c) {
-          const double v = crs.values[static_cast<std::size_t>(a)] * crs.values[static_cast<std::size_t>(c)];
-          const int i = crs.cols[static_cast<std::size_t>(a)], j = crs.cols[static_cast<std::size_t>(c)];
-          H(i, j) += v;
-          if (i != j) H(j, i) += v;
-        }
-      }
-    }
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(n);
+    double cost = 0.0;
+    Evaluate(p, p.Start(), &cost, &H, &g);
+    s.cost = cost;
+    s.rms_whitened = p.num_residuals > 0 ? std::sqrt(2.0 * cost / p.num_residuals) : 0.0;
+    if (n == 0) return;
     Eigen::VectorXd prior(n);
     for (int k = 0; k < n; ++k) {
       const double sigma = (k % 6) < 3 ? options_.prior_sigma_translation : options_.prior_sigma_rotation;
@@ -649,7 +667,7 @@ class Engine {
     }
     const Eigen::MatrixXd H_reg = H + Eigen::MatrixXd(prior.asDiagonal());
     const Eigen::MatrixXd covariance = H_reg.ldlt().solve(Eigen::MatrixXd::Identity(n, n));
-    for (std::size_t k = 0; k < b.free_blocks.size(); ++k) {
+    for (std::size_t k = 0; k < p.block_body.size(); ++k) {
       const int o = static_cast<int>(k) * 6;
       // Marginal information of this block: Schur complement over the others (regularised).
       Matrix6d marginal = H.block(o, o, 6, 6);
@@ -665,7 +683,7 @@ class Engine {
         }
         marginal -= H_kr * H_rr.ldlt().solve(H_kr.transpose());
       }
-      const int body = b.block_body[k];
+      const int body = p.block_body[k];
       const double extent = body < 0 ? input_.laser_extent : scene_.Extent(body);
       const auto free_dirs = UnconstrainedDirections(marginal, extent, options_.unconstrained_std);
       const Matrix6d cov = covariance.block(o, o, 6, 6);
