@@ -13,6 +13,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
 
 #include "ifab/core/error.h"
 #include "ifab/perception/dense_lm.h"
@@ -207,6 +208,7 @@ class Engine {
       s.status = RegistrationStatus::kConverged;
       s.message = "no free body: poses held";
     }
+    flag_all_ = true;
     Match();  // labels and weights at the final poses
     Finish(out, start);
     return out;
@@ -285,14 +287,41 @@ class Engine {
       return;
     }
     const Eigen::Vector3d u = (rp.p - rp.origin) / range;
-    const Scene::Nearest near = scene_.Closest(rp.p);
-    if (near.primitive < 0 || (options_.max_distance > 0.0 && near.distance > options_.max_distance)) {
+    // The closest primitive and the edge test are the costly questions; each is asked only when
+    // its answer can change the match (the final Match asks the edge test of every point, for the
+    // summary's count). The matches are the same as when both are asked of every point.
+    std::optional<Scene::Nearest> nearest;
+    auto near_point = [&]() -> const Scene::Nearest& {
+      if (!nearest) nearest = scene_.Closest(rp.p);
+      return *nearest;
+    };
+    auto too_far = [&] {
+      const Scene::Nearest& n = near_point();
+      return n.primitive < 0 || (options_.max_distance > 0.0 && n.distance > options_.max_distance);
+    };
+    bool flag_known = false;
+    auto flagged = [&] {
+      if (!flag_known) {
+        flagged_[i] = options_.shadow_points &&
+                      scene_.RayPassesNearEdge(rp.origin, u, range + options_.shadow_edge_distance,
+                                               options_.shadow_edge_distance);
+        flag_known = true;
+      }
+      return static_cast<bool>(flagged_[i]);
+    };
+    std::optional<Scene::Hit> hit;
+    if (options_.residual == RegistrationResidual::kRay) {
+      const double reach = options_.max_distance > 0.0 ? options_.max_distance : 1.0;
+      hit = scene_.CastRay(rp.origin, u, range + reach);
+    }
+    // A hit within max_distance of the point along the ray bounds its distance to the model, so
+    // the closest primitive need not be asked to know the point is near enough.
+    const bool near_by_hit = hit && (options_.max_distance <= 0.0 || std::abs(range - hit->t) <= options_.max_distance);
+    if (!near_by_hit && too_far()) {
       matches_[i] = m;
       return;
     }
-    flagged_[i] = options_.shadow_points &&
-                  scene_.RayPassesNearEdge(rp.origin, u, range + options_.shadow_edge_distance,
-                                           options_.shadow_edge_distance);
+    if (flag_all_) flagged();
     double whitened = 0.0;
     if (options_.residual == RegistrationResidual::kRay) {
       // The face the ray hits first explains the point by its range (kRange). Near an edge
@@ -308,6 +337,7 @@ class Engine {
         double signed_distance{0.0}, error{0.0}, sigma{1.0};
       };
       auto closest_candidate = [&] {
+        const Scene::Nearest& near = near_point();
         Candidate k;
         k.primitive = near.primitive;
         k.x = near.point;
@@ -318,8 +348,6 @@ class Engine {
         k.sigma = std::sqrt(options_.noise.NormalVariance(u, range, k.n));
         return k;
       };
-      const double reach = options_.max_distance > 0.0 ? options_.max_distance : 1.0;
-      const auto hit = scene_.CastRay(rp.origin, u, range + reach);
       Candidate chosen;
       if (hit) {
         chosen.primitive = hit->primitive;
@@ -333,7 +361,7 @@ class Engine {
         chosen.error = std::abs(chosen.signed_distance) / c;
         chosen.sigma = std::sqrt(options_.noise.NormalVariance(u, range, chosen.n)) / c;
         const bool off = chosen.error > options_.shadow_distance && chosen.error > options_.shadow_sigmas * chosen.sigma;
-        if (flagged_[i] && off) {
+        if (off && flagged()) {
           const Candidate other = closest_candidate();
           if (other.primitive == chosen.primitive ||
               (other.error > options_.shadow_distance && other.error > options_.shadow_sigmas * other.sigma)) {
@@ -373,7 +401,8 @@ class Engine {
       whitened = chosen.signed_distance / normal_sigma;
     } else {
       // Eq. 7 and the paper's shadow rule: flagged and far from the closest primitive: zero error.
-      if (flagged_[i] && near.distance > options_.shadow_distance) {
+      const Scene::Nearest& near = near_point();
+      if (near.distance > options_.shadow_distance && flagged()) {
         labels_[i] = PointLabel::kShadow;
         matches_[i] = m;
         return;
@@ -707,6 +736,7 @@ class Engine {
   std::vector<PointMatch> matches_;
   std::vector<PointLabel> labels_;
   std::vector<char> flagged_;
+  bool flag_all_{false};  // ask every point's edge test (the final Match: the summary counts them)
 };
 
 }  // namespace
