@@ -143,6 +143,15 @@ class Engine {
     matches_.resize(n);
     labels_.resize(n);
     flagged_.resize(n);
+    if (!calibrating_) {
+      // Registration: the cloud is fixed, so each point's ray is computed once for all steps.
+      rays_.resize(n);
+      for (std::size_t i = 0; i < n; ++i) {
+        const RayPoint& rp = (*input.cloud)[i];
+        const double range = rp.Range();
+        rays_[i] = {rp.origin, range > 0.0 ? Eigen::Vector3d((rp.p - rp.origin) / range) : Eigen::Vector3d::UnitX(), range};
+      }
+    }
   }
 
   PoseProblemOutput Run() {
@@ -434,7 +443,6 @@ class Engine {
     std::vector<Eigen::Matrix3d> R0;
     Eigen::Matrix3d R0_laser{Eigen::Matrix3d::Identity()};
     std::vector<std::vector<std::size_t>> points;  // per body: its informative points
-    std::vector<std::vector<RayT<double>>> rays;   // registration: their rays
     struct Chunk {
       std::size_t body, begin, end;
     };
@@ -477,17 +485,11 @@ class Engine {
     p.x0_laser = ParamsAt(laser_);
     p.R0_laser = laser_.linear();
     p.points.resize(poses_.size());
-    p.rays.resize(poses_.size());
     for (std::size_t i = 0; i < matches_.size(); i += static_cast<std::size_t>(stride)) {
       if (labels_[i] != PointLabel::kInlier) continue;
       const auto k = static_cast<std::size_t>(matches_[i].body);
       p.points[k].push_back(i);
       p.num_residuals += matches_[i].NumResiduals();
-      if (!calibrating_) {
-        const RayPoint& rp = (*input_.cloud)[i];
-        const double range = rp.Range();
-        p.rays[k].push_back({rp.origin, (rp.p - rp.origin) / range, range});
-      }
     }
     for (std::size_t k = 0; k < poses_.size(); ++k)
       for (std::size_t c = 0; c < p.points[k].size(); c += kChunk)
@@ -533,7 +535,7 @@ class Engine {
         const PointMatch& m = matches_[i];
         const ScenePrimitive* prim = m.primitive >= 0 ? &scene_.primitives()[static_cast<std::size_t>(m.primitive)] : nullptr;
         if (!calibrating_) {
-          RegistrationTerms(m, prim, p.rays[k][j], XB[k], jacobians, t);
+          RegistrationTerms(m, prim, rays_[i], XB[k], jacobians, t);
         } else if (input_.autodiff) {
           CalibrationTermsAutodiff(m, prim, (*input_.sweep)[i], xl.data(), p.R0_laser, xb[k].data(), p.R0[k], jacobians, t);
         } else {
@@ -736,6 +738,7 @@ class Engine {
   std::vector<PointMatch> matches_;
   std::vector<PointLabel> labels_;
   std::vector<char> flagged_;
+  std::vector<RayT<double>> rays_;  // registration: each point's ray (origin, unit direction, range)
   bool flag_all_{false};  // ask every point's edge test (the final Match: the summary counts them)
 };
 
