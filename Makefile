@@ -13,7 +13,9 @@ FUZZ_DIR     ?= build-fuzz
 FUZZ_SECONDS ?= 60
 FUZZ_ARGS    ?=
 
-.PHONY: all deps configure build bundle run test bench clean test-sanitize fuzz fuzz-build
+PEERS_ARGS ?=
+
+.PHONY: all deps configure build bundle run test bench bench-peers clean test-sanitize fuzz fuzz-build
 
 all: build
 
@@ -65,6 +67,14 @@ fuzz-build: $(FUZZ_DIR)/build.ninja
 # Each harness for FUZZ_SECONDS from its corpus (new inputs are kept in $(FUZZ_DIR)/corpus/).
 fuzz: fuzz-build
 	@scripts/run-fuzzers $(FUZZ_DIR) $(FUZZ_SECONDS) $(FUZZ_ARGS)
+
+# ifab beside Open3D, OMPL and KDL on the same inputs (bench/peers.cc): one table. Installs the
+# peers first (they are not dependencies of ifab) and re-configures so CMake finds them.
+bench-peers: build
+	@scripts/install-deps --with-peers
+	cmake -S . -B $(BUILD_DIR) -G Ninja -DCMAKE_BUILD_TYPE=Release $(CMAKE_ARGS)
+	cmake --build $(BUILD_DIR) -j $(JOBS) --target peers
+	$(BUILD_DIR)/bench/peers $(PEERS_ARGS)
 
 clean:
 	rm -rf $(BUILD_DIR) $(SANITIZE_DIR) $(FUZZ_DIR)

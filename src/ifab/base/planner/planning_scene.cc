@@ -249,8 +249,14 @@ double FootprintChecker::Clearance(const Pose2& T_site_base, std::string* closes
   const Box box = MakeBox(T_site_base);
   double d = BoundaryClearance(box, kInf);
   if (closest) *closest = "boundary";
+  const double r = robot_.CircumRadius();
   for (std::size_t k = 0; k < obstacles_.size(); ++k) {
-    const double dk = BoxDistance(box, obstacles_[k], kInf);
+    // Bounding circles give a lower bound on the distance: an obstacle that cannot come closer
+    // than the closest so far is skipped, and the others are culled at it (BoxDistance is exact
+    // below its cull distance), so the minimum is the same as checking each exactly.
+    const Convex& o = obstacles_[k];
+    if ((box.centre - o.centre).norm() - o.radius - r >= d) continue;
+    const double dk = BoxDistance(box, o, d);
     if (dk < d) {
       d = dk;
       if (closest) *closest = scene_.obstacle_names[k];

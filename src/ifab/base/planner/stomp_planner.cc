@@ -728,15 +728,18 @@ PlanResult StompBasePlanner::Plan(const Pose2& start, const Pose2& goal, const R
   double best_score = kInf;
   for (int a = 0; a < attempts; ++a) {
     TrajectoryMatrix qa = candidates[order[a]];
-    spdlog::debug("stomp phase 2 attempt {} start: cost {:.4g}, clearance {:.3f} m, sideways {:.2e} m", a,
-                  candidate_cost[order[a]], DenseClearance(qa), LateralResiduals(qa).cwiseAbs().maxCoeff());
+    // (Arguments of a log call are evaluated even when the level is off: these checks are costly.)
+    if (spdlog::should_log(spdlog::level::debug))
+      spdlog::debug("stomp phase 2 attempt {} start: cost {:.4g}, clearance {:.3f} m, sideways {:.2e} m", a,
+                    candidate_cost[order[a]], DenseClearance(qa), LateralResiduals(qa).cwiseAbs().maxCoeff());
     result.phase2_iterations += RunPhase(2, &qa, a == 0 ? rng : rng.Derive(static_cast<std::uint64_t>(a)), &ws, &cost);
     // The result is polished far below the tolerance (Gauss-Newton converges quadratically here).
     ProjectOntoConstraints(&qa, &ws, 2 * options_.constraint_projection_steps, 1e-3 * options_.constraint_tolerance);
     const bool valid = LateralResiduals(qa).cwiseAbs().maxCoeff() <= options_.constraint_tolerance &&
                        DenseCollisionFree(qa, options_.required_clearance);
-    spdlog::debug("stomp phase 2 attempt {}: cost {:.4g}, clearance {:.3f} m, valid {}", a, cost, DenseClearance(qa),
-                  valid);
+    if (spdlog::should_log(spdlog::level::debug))
+      spdlog::debug("stomp phase 2 attempt {}: cost {:.4g}, clearance {:.3f} m, valid {}", a, cost, DenseClearance(qa),
+                    valid);
     // Score: valid trajectories by cost, invalid ones after all valid ones.
     const double score = valid ? cost : 1e300 - DenseClearance(qa);
     if (score < best_score) {
