@@ -23,7 +23,7 @@ struct PickPlace {
 
   PickPlace() {
     const ConfigNode robot_yaml = ConfigNode::LoadFile(DataPath("robots/insitu_fabricator.yaml"));
-    sim_options = sim::SimOptions::FromConfig(robot_yaml["sim"]);
+    sim_options = sim::SimOptions::Load(DataPath("sim/insitu_fabricator.yaml"));
     robot = LoadRobotModel(DataPath("robots/insitu_fabricator.urdf"));
     const auto f = robot_yaml["feeder_in_base"].AsNumbers(6);
     T_base_feeder = PoseFromXyzRpy(f[0], f[1], f[2], f[3], f[4], f[5]);

@@ -49,7 +49,10 @@ SimOptions SimOptions::FromConfig(const ConfigNode& c) {
   if (auto t = c.Find("tracks")) o.tracks = TrackOptions::FromConfig(*t);
   // Both lasers are UTM-30LX: one sensor file, optional per-laser overrides are not needed.
   if (auto l = c.Find("laser")) {
-    o.base_laser = o.arm_laser = LrfOptions::FromConfig(ConfigNode::LoadSection(UnderData(l->As<std::string>(), here), "lrf"));
+    // The sensor file also holds the perception side's noise profile (`noise:`), not the simulator's.
+    const ConfigNode sensor = ConfigNode::LoadFile(UnderData(l->As<std::string>(), here));
+    sensor.ExpectKeys({"lrf", "noise"});
+    o.base_laser = o.arm_laser = LrfOptions::FromConfig(sensor["lrf"]);
   }
   if (auto g = c.Find("gyro")) {
     const ConfigNode sensor = ConfigNode::LoadFile(UnderData(g->As<std::string>(), here));
