@@ -11,7 +11,7 @@
 namespace ifab::sim {
 namespace {
 
-SimOptions Default() { return SimOptions::Load(DataPath("robots/insitu_fabricator.yaml")); }
+SimOptions Default() { return SimOptions::Load(DataPath("sim/insitu_fabricator.yaml")); }
 
 FaultSpec Spec(FaultKind kind, double drive_time, double duration = 0.0, double magnitude = 0.0) {
   FaultSpec f;
