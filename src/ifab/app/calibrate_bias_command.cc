@@ -53,16 +53,10 @@ json Run(const Options& o) {
   const std::string plan_path = o.plan_path.empty() ? DataPath("perception/arm_laser_calibration.yaml") : o.plan_path;
   const sequencer::LaserCalibrationPlan plan = sequencer::LaserCalibrationPlan::FromConfig(ConfigNode::LoadFile(plan_path));
   if (!plan.range_bias) ThrowInputError("{}: range_bias: expected a section that says how to identify the bias", plan_path);
-  const std::string target_path = o.target_path.empty() ? DataPath("perception/cube_target.yaml") : o.target_path;
-  const ConfigNode target = ConfigNode::LoadFile(target_path);
-  target.ExpectKeys({"cube", "ground_z_guess"});
-  const ConfigNode cube = target["cube"];
-  cube.ExpectKeys({"size", "pose_guess"});
-  double size = 0.25;
-  cube.ReadPositive("size", size);
-  const auto p = cube["pose_guess"].AsNumbers(6);
-  const Pose3 T_base_cube = PoseFromXyzRpy(p[0], p[1], p[2], p[3] * M_PI / 180, p[4] * M_PI / 180, p[5] * M_PI / 180);
-  const double ground_z = target.Get<double>("ground_z_guess", 0.0);
+  const CubeTarget target = LoadCubeTarget(o.target_path);
+  const double size = target.size;
+  const Pose3 T_base_cube = target.T_base_cube;
+  const double ground_z = target.ground_z;
   const Pose3 mount_guess = o.mount_guess.empty() ? robot.T_tool0_arm_laser : ParsePoseArgument(o.mount_guess, "--mount");
 
   json sweeps_info = json::array(), floor_info = json::array();

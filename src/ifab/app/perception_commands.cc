@@ -310,22 +310,30 @@ json RegisterCommand(const RegisterCommandOptions& o) {
   return j;
 }
 
+CubeTarget LoadCubeTarget(const std::string& path) {
+  const std::string target_path = path.empty() ? DataPath("perception/cube_target.yaml") : path;
+  const ConfigNode target = ConfigNode::LoadFile(target_path);
+  target.ExpectKeys({"cube", "ground_z_guess"});
+  const ConfigNode cube = target["cube"];
+  cube.ExpectKeys({"size", "pose_guess"});
+  CubeTarget t;
+  cube.ReadPositive("size", t.size);
+  const auto p = cube["pose_guess"].AsNumbers(6);
+  t.T_base_cube = PoseFromXyzRpy(p[0], p[1], p[2], p[3] * M_PI / 180, p[4] * M_PI / 180, p[5] * M_PI / 180);
+  t.ground_z = target.Get<double>("ground_z_guess", 0.0);
+  return t;
+}
+
 json CalibrateCommand(const CalibrateCommandOptions& o) {
   const auto start = std::chrono::steady_clock::now();
   if (o.sweep_paths.empty()) ThrowInputError("calibrate: give at least one sweep file");
   PerceptionConfig config = LoadPerceptionConfig(o.config_path);
   ApplySensor(o.sensor, config, config.calibration.registration);
   const RobotModel robot = LoadRobotModel(o.robot_path.empty() ? DataPath("robots/insitu_fabricator.urdf") : o.robot_path);
-  const std::string target_path = o.target_path.empty() ? DataPath("perception/cube_target.yaml") : o.target_path;
-  const ConfigNode target = ConfigNode::LoadFile(target_path);
-  target.ExpectKeys({"cube", "ground_z_guess"});
-  const ConfigNode cube = target["cube"];
-  cube.ExpectKeys({"size", "pose_guess"});
-  double size = 0.25;
-  cube.ReadPositive("size", size);
-  const auto p = cube["pose_guess"].AsNumbers(6);
-  const Pose3 T_base_cube = PoseFromXyzRpy(p[0], p[1], p[2], p[3] * M_PI / 180, p[4] * M_PI / 180, p[5] * M_PI / 180);
-  const double ground_z = target.Get<double>("ground_z_guess", 0.0);
+  const CubeTarget target = LoadCubeTarget(o.target_path);
+  const double size = target.size;
+  const Pose3 T_base_cube = target.T_base_cube;
+  const double ground_z = target.ground_z;
   const Pose3 mount_guess = o.mount_guess.empty() ? robot.T_tool0_arm_laser : ParsePoseArgument(o.mount_guess, "--mount");
 
   std::vector<CalibrationSweep> sweeps;

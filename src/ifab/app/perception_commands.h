@@ -39,6 +39,16 @@ namespace ifab {
 /// "x y z roll pitch yaw" (spaces or commas; metres and degrees unless `radians`).
 Pose3 ParsePoseArgument(const std::string& text, const std::string& what, bool radians = false);
 
+/// The calibration target file (`data/perception/cube_target.yaml`): the cube's size, its pose
+/// guess in the base frame (degrees in the file) and the floor height guess.
+struct CubeTarget {
+  double size{0.25};
+  Pose3 T_base_cube{Pose3::Identity()};
+  double ground_z{0.0};
+};
+/// Reads `path`, or the shipped cube_target.yaml when it is empty.
+CubeTarget LoadCubeTarget(const std::string& path);
+
 struct RegisterCommandOptions {
   std::string cloud_path;   ///< PLY
   std::string site_path;    ///< site YAML

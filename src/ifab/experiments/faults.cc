@@ -40,6 +40,7 @@ class WatchedRobot final : public hal::Robot {
   void SetLaserActive(DeviceId id, bool active) override { sim_.SetLaserActive(id, active); }
   std::vector<LaserScan> TakeLaserScans(DeviceId id) override { return sim_.TakeLaserScans(id); }
   std::vector<GyroSample> TakeGyroSamples() override { return sim_.TakeGyroSamples(); }
+  std::vector<AccelSample> TakeAccelSamples() override { return sim_.TakeAccelSamples(); }  // tilt compensation
   std::vector<JointState> TakeJointStates() override { return sim_.TakeJointStates(); }
   std::vector<SyncPulse> TakeSyncPulses() override { return sim_.TakeSyncPulses(); }
 
