@@ -169,7 +169,8 @@ RangeBiasOptions RangeBiasOptions::FromConfig(const ConfigNode& c) {
   c.ExpectMap();
   c.ExpectKeys({"range_knots", "incidence_knots_deg", "sigma_along", "prior_sigma", "smoothness_sigma",
                 "max_residual", "edge_distance", "max_incidence_deg", "loss_scale", "max_iterations",
-                "step_tolerance", "pose_prior_sigma_translation", "pose_prior_sigma_rotation", "point_stride"});
+                "step_tolerance", "pose_prior_sigma_translation", "pose_prior_sigma_rotation", "point_stride",
+                "sweep_correlated_errors"});
   RangeBiasOptions o;
   if (auto k = c.Find("range_knots")) {
     o.range_knots = k->AsNumbers();
@@ -194,6 +195,7 @@ RangeBiasOptions RangeBiasOptions::FromConfig(const ConfigNode& c) {
   c.ReadPositive("pose_prior_sigma_translation", o.pose_prior_sigma_translation);
   c.ReadPositive("pose_prior_sigma_rotation", o.pose_prior_sigma_rotation);
   c.ReadPositive("point_stride", o.point_stride);
+  o.sweep_correlated_errors = c.Get<bool>("sweep_correlated_errors", o.sweep_correlated_errors);
   return o;
 }
 
@@ -205,6 +207,31 @@ std::string RangeBiasSummary::BriefReport() const {
   for (const auto& w : warnings) s += "\n  warning: " + w;
   return s;
 }
+
+namespace {
+
+// Errors that repeat along a sweep (the floor patch's own shape, the arm posture's kinematic
+// error, a target not quite its drawn size) do not average down over the sweep's points the way
+// the noise does, only over sweeps. Their covariance shows in how much each sweep's gradient
+// scatters beyond what the noise alone gives (a cluster-robust "sandwich", the clusters being the
+// sweeps): M = sum_g s_g s_g^T - f H_data, with s_g sweep g's score (centred over the sweeps) and
+// f H_data its expectation under independent noise; the part of M that is positive, mapped
+// through H^-1, is added to the noise-only covariance f H^-1. With independent noise M is about
+// zero and the covariance stays f H^-1.
+Eigen::MatrixXd SweepCorrelatedCovariance(const Eigen::MatrixXd& H_inv, const Eigen::MatrixXd& H_data,
+                                          const Eigen::MatrixXd& sweep_scores, double variance_factor) {
+  const int G = static_cast<int>(sweep_scores.cols());
+  const Eigen::VectorXd mean = sweep_scores.rowwise().mean();
+  const Eigen::MatrixXd centred = sweep_scores.colwise() - mean;
+  // G / (G - 1): the centring took one sweep's worth of scatter out.
+  Eigen::MatrixXd M = centred * centred.transpose() * (double(G) / (G - 1)) - variance_factor * H_data;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(0.5 * (M + M.transpose()));
+  const Eigen::VectorXd lambda = eig.eigenvalues().cwiseMax(0.0);
+  M = eig.eigenvectors() * lambda.asDiagonal() * eig.eigenvectors().transpose();
+  return H_inv * M * H_inv;
+}
+
+}  // namespace
 
 RangeBiasSummary IdentifyRangeBias(const std::vector<CalibrationSweep>& sweeps,
                                    const std::vector<RegistrationBody>& bodies, const Pose3& T_tool0_laser_guess,
@@ -226,9 +253,13 @@ RangeBiasSummary IdentifyRangeBias(const std::vector<CalibrationSweep>& sweeps,
       P += 6;
     }
   std::vector<const SweepPoint*> points;
-  for (const auto& sw : sweeps)
-    for (std::size_t i = 0; i < sw.points.size(); i += static_cast<std::size_t>(o.point_stride))
-      points.push_back(&sw.points[i]);
+  std::vector<int> point_sweep;  // the sweep each point came from (the covariance's clusters)
+  for (std::size_t k = 0; k < sweeps.size(); ++k)
+    for (std::size_t i = 0; i < sweeps[k].points.size(); i += static_cast<std::size_t>(o.point_stride)) {
+      points.push_back(&sweeps[k].points[i]);
+      point_sweep.push_back(static_cast<int>(k));
+    }
+  const int G = static_cast<int>(sweeps.size());
   s.num_points = static_cast<int>(points.size());
 
   // The prior: each knot near zero, and close to its neighbours along range and along incidence
@@ -257,6 +288,7 @@ RangeBiasSummary IdentifyRangeBias(const std::vector<CalibrationSweep>& sweeps,
   Eigen::VectorXd g(P);
   const double sigma2 = o.sigma_along * o.sigma_along;
   double chi2 = 0.0, weight_sum = 0.0;
+  Eigen::MatrixXd sweep_scores(P, G);  // each sweep's share of the gradient
   for (int iter = 0; iter <= o.max_iterations; ++iter) {
     Scene scene(bodies);
     scene.SetPoses(s.T_base_body);
@@ -265,9 +297,10 @@ RangeBiasSummary IdentifyRangeBias(const std::vector<CalibrationSweep>& sweeps,
     g.head(K) = prior.topLeftCorner(K, K) * s.model.coefficients;
     chi2 = 0.0;
     weight_sum = 0.0;
+    sweep_scores.setZero();
     int used = 0;
-    std::vector<double> row(static_cast<std::size_t>(P));
-    for (const SweepPoint* sp : points) {
+    for (std::size_t pi = 0; pi < points.size(); ++pi) {
+      const SweepPoint* sp = points[pi];
       const double r_meas = sp->p_laser.norm();
       if (!(r_meas > 0.0)) continue;
       const Pose3 T_base_laser = sp->T_base_tool0 * s.T_tool0_laser;
@@ -335,8 +368,10 @@ RangeBiasSummary IdentifyRangeBias(const std::vector<CalibrationSweep>& sweeps,
           cols[m] = pb + k;
           vals[m++] = J_body[k];
         }
+      const int sweep = point_sweep[pi];
       for (int a = 0; a < m; ++a) {
         g[cols[a]] += wt * vals[a] * e;
+        sweep_scores(cols[a], sweep) += wt * vals[a] * e;
         for (int b = 0; b < m; ++b) H(cols[a], cols[b]) += wt * vals[a] * vals[b];
       }
     }
@@ -371,7 +406,10 @@ RangeBiasSummary IdentifyRangeBias(const std::vector<CalibrationSweep>& sweeps,
   // A noise model that is too optimistic (unmodelled floor unevenness, a cube not quite its
   // nominal size) shows as chi^2 per point above 1: widen the covariance by it, never narrow it.
   s.variance_factor = std::max(1.0, chi2 / std::max(weight_sum, 1.0));
-  const Eigen::MatrixXd cov = H.ldlt().solve(Eigen::MatrixXd::Identity(P, P)) * s.variance_factor;
+  const Eigen::MatrixXd H_inv = H.ldlt().solve(Eigen::MatrixXd::Identity(P, P));
+  Eigen::MatrixXd cov = H_inv * s.variance_factor;
+  if (o.sweep_correlated_errors && G > 1) cov += SweepCorrelatedCovariance(H_inv, H - prior, sweep_scores,
+                                                                          s.variance_factor);
   s.model.covariance = cov.topLeftCorner(K, K);
   s.mount_covariance = cov.block<6, 6>(K, K);
   s.usable = s.model.coefficients.allFinite() && s.model.covariance.allFinite();

@@ -67,10 +67,14 @@ struct RangeBiasOptions {
   double pose_prior_sigma_translation{1.0};  ///< [m] on the mount's and bodies' change (gauge of the ground)
   double pose_prior_sigma_rotation{1.0};     ///< [rad]
   int point_stride{2};             ///< use every n-th point (speed: a calibration has about 1e6)
+  /// The covariance also holds the errors that repeat along a sweep, from how the sweeps' gradients
+  /// scatter (a cluster-robust covariance); false: independent noise only (narrower, optimistic
+  /// when the floor is uneven or the arm's kinematics are off).
+  bool sweep_correlated_errors{true};
 
   /// Reads {range_knots, incidence_knots_deg, sigma_along, prior_sigma, smoothness_sigma,
   /// max_residual, edge_distance, max_incidence_deg, loss_scale, max_iterations, step_tolerance,
-  /// pose_prior_sigma_translation, pose_prior_sigma_rotation, point_stride}.
+  /// pose_prior_sigma_translation, pose_prior_sigma_rotation, point_stride, sweep_correlated_errors}.
   static RangeBiasOptions FromConfig(const ConfigNode& config);
 };
 

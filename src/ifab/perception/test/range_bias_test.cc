@@ -46,8 +46,11 @@ Pose3 LookingAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target, doubl
 
 // Sweeps as a calibration records them: the floor from several heights (Fig. 7) and the cube
 // from near and far, steep and shallow, each a few scans while the view turns slightly.
+// posture_sigma > 0: each sweep's flange pose as the arm reports it is off the true one by a
+// pose drawn per sweep (translation std posture_sigma, rotation std posture_sigma / 1 m), as an
+// arm's kinematic errors put it (millimetres at the flange, the same along one short sweep).
 std::vector<CalibrationSweep> Sweeps(const Scene& world, const Pose3& T_tool0_laser, const testing::SyntheticLaser& laser,
-                                     RandomStream& rng) {
+                                     RandomStream& rng, double posture_sigma = 0.0) {
   std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> views;  // eye, target
   for (double h : {0.4, 0.6, 0.9, 1.3, 1.8}) views.push_back({{1.0, -0.9, h}, {1.02, -0.9, 0.0}});
   const Eigen::Vector3d cube(1.7, 0.0, 0.125);
@@ -59,6 +62,11 @@ std::vector<CalibrationSweep> Sweeps(const Scene& world, const Pose3& T_tool0_la
   for (std::size_t v = 0; v < views.size(); ++v) {
     CalibrationSweep sw;
     sw.name = "view " + std::to_string(v);
+    Pose3 posture_error = Pose3::Identity();
+    if (posture_sigma > 0.0)
+      posture_error = PoseFromXyzRpy(rng.Normal(posture_sigma), rng.Normal(posture_sigma),
+                                     rng.Normal(posture_sigma), rng.Normal(posture_sigma),
+                                     rng.Normal(posture_sigma), rng.Normal(posture_sigma));
     const int scans = 12;
     for (int k = 0; k < scans; ++k) {
       const double turn = 0.12 * (k / double(scans - 1) - 0.5);  // the view turns +-3.4 deg
@@ -66,7 +74,7 @@ std::vector<CalibrationSweep> Sweeps(const Scene& world, const Pose3& T_tool0_la
       const Eigen::Vector3d aim = views[v].second + Eigen::Vector3d(0.0, 0.0, 0.0);
       Pose3 T_base_laser = LookingAt(views[v].first, aim, roll);
       T_base_laser.linear() = T_base_laser.linear() * ExpSO3(Eigen::Vector3d(0, 0, turn));
-      const Pose3 T_base_tool0 = T_base_laser * T_tool0_laser.inverse();
+      const Pose3 T_base_tool0 = T_base_laser * T_tool0_laser.inverse() * posture_error;
       for (int i = 0; i < laser.beams; ++i) {
         const double a = laser.angle_min + i * laser.angle_increment;
         const double r = testing::CastBeam(world, T_base_laser, a, laser, rng);
@@ -144,6 +152,43 @@ TEST(RangeBias, IdentificationRecoversADrawnCurveWithinItsReportedUncertainty) {
   EXPECT_LT(abs_error / checked, 0.0012);
   EXPECT_LT(abs_error_large, 0.2 * abs_bias_large);
   EXPECT_LT(mount_z2 / 4.0, 3.0 * 6.0);  // mean chi^2 per seed (6 expected)
+}
+
+// With errors that repeat along each sweep (the arm's kinematic error at the sweep's posture),
+// the noise-only covariance would be far too narrow (its std shrinks with the number of points,
+// the error does not); the covariance from the sweeps' scatter still covers the error.
+TEST(RangeBias, ReportedUncertaintyCoversErrorsThatRepeatAlongASweep) {
+  const Pose3 T_base_cube = PoseFromXyzRpy(1.7, 0.0, 0.125, 0.0, 0.0, 0.1);
+  const Scene world(CubeOnGroundBodies(0.25, T_base_cube, 0.0));
+  const Pose3 T_tool0_laser = PoseFromXyzRpy(0.05, 0.0, 0.12, 0.0, -M_PI / 2, 0.0);
+  int checked = 0, inside2 = 0, inside2_independent = 0;
+  for (std::uint64_t seed : {21u, 22u, 23u}) {
+    RandomStream rng(seed);
+    const DrawnBias truth(rng);
+    testing::SyntheticLaser laser = Laser();
+    laser.range_bias = truth;
+    const auto sweeps = Sweeps(world, T_tool0_laser, laser, rng, 0.0015);
+    const auto bodies = CubeOnGroundBodies(0.25, T_base_cube * PoseFromXyzRpy(0.004, -0.003, 0.002, 0, 0, 0.01), 0.003);
+    RangeBiasOptions options;
+    options.point_stride = 1;
+    const RangeBiasSummary s = IdentifyRangeBias(sweeps, bodies, T_tool0_laser, options);
+    options.sweep_correlated_errors = false;
+    const RangeBiasSummary s_independent = IdentifyRangeBias(sweeps, bodies, T_tool0_laser, options);
+    ASSERT_TRUE(s.usable) << s.BriefReport();
+    for (double r = 0.4; r <= 3.0; r += 0.05)
+      for (double deg = 0.0; deg <= 80.0; deg += 5.0) {
+        const double inc = deg * M_PI / 180.0, sd = s.model.Std(r, inc);
+        if (sd > 0.5 * 0.018) continue;  // where compensation would use the model
+        ++checked;
+        inside2 += std::abs(s.model.Bias(r, inc) - truth(r, inc)) < 2.0 * sd;
+        inside2_independent +=
+            std::abs(s_independent.model.Bias(r, inc) - truth(r, inc)) < 2.0 * s_independent.model.Std(r, inc);
+      }
+  }
+  ASSERT_GT(checked, 300);
+  EXPECT_GE(double(inside2) / checked, 0.85) << inside2 << " of " << checked;
+  // The noise-only covariance on the same fits: what the sweep term corrects.
+  EXPECT_LT(double(inside2_independent) / checked, 0.85) << inside2_independent << " of " << checked;
 }
 
 TEST(RangeBias, ModelIsUncertainWhereNoSweepLooked) {
