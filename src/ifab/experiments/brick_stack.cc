@@ -177,14 +177,16 @@ Setup LoadSetup(const ConfigNode& c) {
 namespace {
 
 nlohmann::json ScoreRangeBias(const RangeBiasSummary& bias, const RangeBiasCompensation& comp,
-                              const sim::LrfOptions& unit) {
+                              const sim::LrfOptions& unit, double drift_at_sweeps) {
   Stats err, err_used, z;
   int used = 0, within2 = 0;
   nlohmann::json table = nlohmann::json::array();
   for (double r = 0.3; r <= 3.0001; r += 0.1)
     for (double deg = 0.0; deg <= 80.0; deg += 10.0) {
       const double inc = DegToRad(deg);
-      const double b = bias.model.Bias(r, inc), truth = unit.Bias(r, inc), sd = bias.model.Std(r, inc);
+      // The unit's curve plus its warm-up drift while the sweeps were taken (what they measured).
+      const double b = bias.model.Bias(r, inc), truth = unit.Bias(r, inc) + drift_at_sweeps;
+      const double sd = bias.model.Std(r, inc);
       const bool in_use = sd <= comp.max_std_fraction * comp.sigma_along;
       err.Add(1e3 * std::abs(b - truth));
       if (in_use) {
@@ -207,6 +209,7 @@ nlohmann::json ScoreRangeBias(const RangeBiasSummary& bias, const RangeBiasCompe
           {"error_vs_true_mm_max_in_use", err_used.max},
           {"error_vs_true_mm_mean_all", err.Mean()},
           {"within_2_std_fraction_in_use", used ? double(within2) / used : 0.0},
+          {"warmup_drift_at_sweeps_mm", 1e3 * drift_at_sweeps},
           {"curve", table}};
 }
 
@@ -249,6 +252,7 @@ nlohmann::json AsBuiltSummary(const Setup& setup) {
           {"arm_flange_error_mm", {{"park", 1e3 * a.FlangeErrorAt(setup.parts.robot, q_park)}, {"max_of_20_poses", 1e3 * flange_max}}},
           {"arm_gravity_compliance_deg_per_knm", {RadToDeg(a.gravity_compliance[0]) * 1e3, RadToDeg(a.gravity_compliance[1]) * 1e3}},
           {"encoder_noise_deg", RadToDeg(a.encoder_noise)},
+          {"calibration_cube_edge_error_mm", mm3(a.cube_size_error)},
           {"arm_laser", {{"walk_bias_at_0.4m_mm", 1e3 * unit.Bias(0.4, 0.0) - 1e3 * unit.Bias(10.0, 0.0)},
                          {"nominal_walk_bias_at_0.4m_mm", 1e3 * nominal.Bias(0.4, 0.0) - 1e3 * nominal.Bias(10.0, 0.0)},
                          {"bias_at_0.11m_mm", 1e3 * unit.Bias(0.11, 0.0)},
@@ -269,12 +273,16 @@ Pose3 CalibrateMount(const Setup& setup, std::uint64_t seed, const RunContext& c
                                                                       DegToRad(rng.Normal(2.0)));
   const Pose3 T_site_cube = PoseFromXyzRpy(0.0, 0.0, 0.5 * plan.cube_size, 0.0, 0.0, 0.0);
   const auto b = XyzRpyFromPose(T_site_cube * T_base_cube_true.inverse());
-  sim::SimRobot sim(setup.sim_options, Pose2(b[0], b[1], b[5]), plan.scan_posture, seed + 7919);
+  sim::SimOptions sim_options = setup.sim_options;
+  sim_options.seconds_since_power_on = plan.warmup_s;  // the operator switched the laser on this long ago
+  sim::SimRobot sim(sim_options, Pose2(b[0], b[1], b[5]), plan.scan_posture, seed + 7919);
   // The cube stands on the floor as built (its height there; its tilt is the floor's slope of a
   // few hundredths of a degree, left out).
+  // Its edges are as machined (the as-built draw), not the drawing's size the stack assumes.
+  const Eigen::Vector3d cube_true = Eigen::Vector3d::Constant(plan.cube_size) + setup.sim_options.as_built.cube_size_error;
   Pose3 T_site_cube_true = T_site_cube;
-  T_site_cube_true.translation().z() = sim.world().FloorHeight(0.0, 0.0) + 0.5 * plan.cube_size;
-  sim.mutable_world().AddBrick({"cube", T_site_cube_true, Box{Eigen::Vector3d::Constant(plan.cube_size)}});
+  T_site_cube_true.translation().z() = sim.world().FloorHeight(0.0, 0.0) + 0.5 * cube_true.z();
+  sim.mutable_world().AddBrick({"cube", T_site_cube_true, Box{cube_true}});
   const sequencer::ArmLaserCalibration cal = sequencer::CalibrateArmLaserAndRangeBias(
       sim, setup.parts.robot, setup.parts.arm, plan, plan.scan_posture, [&](const std::string& t) { ctx.Progress(t); });
   const CalibrationSummary& cs = cal.mount;
@@ -288,11 +296,14 @@ Pose3 CalibrateMount(const Setup& setup, std::uint64_t seed, const RunContext& c
            {"message", cs.message},
            {"error_vs_true_mm", {1e3 * v[0], 1e3 * v[1], 1e3 * v[2]}},
            {"error_vs_true_deg", {RadToDeg(v[3]), RadToDeg(v[4]), RadToDeg(v[5])}},
-           {"sim_seconds", sim.Now()}};
+           {"sim_seconds", sim.Now()},
+           {"laser_on_seconds", plan.warmup_s + sim.Now()}};
   if (cal.bias) {
-    (*info)["range_bias"] = ScoreRangeBias(*cal.bias, cal.compensation,
-                                           setup.sim_options.as_built.exact ? setup.sim_options.arm_laser
-                                                                            : setup.sim_options.as_built.arm_laser);
+    const sim::LrfOptions& unit =
+        setup.sim_options.as_built.exact ? setup.sim_options.arm_laser : setup.sim_options.as_built.arm_laser;
+    const double t_mid = plan.warmup_s + 0.5 * sim.Now();
+    (*info)["range_bias"] = ScoreRangeBias(*cal.bias, cal.compensation, unit,
+                                           unit.warmup_amplitude * std::exp(-t_mid / unit.warmup_tau));
     const auto u = XyzRpyFromPose(sim.true_T_tool0_arm_laser().inverse() * cal.mount_uncompensated.T_tool0_laser);
     (*info)["uncompensated_error_vs_true_mm"] = {1e3 * u[0], 1e3 * u[1], 1e3 * u[2]};
     (*info)["uncompensated_error_vs_true_deg"] = {RadToDeg(u[3]), RadToDeg(u[4]), RadToDeg(u[5])};
@@ -310,8 +321,8 @@ nlohmann::json Run(const RunContext& ctx) {
   nlohmann::json mount_info = {{"source", "design"}};
   if (setup.calibrate_mount) {
     setup.parts.T_tool0_arm_laser = CalibrateMount(setup, ctx.seed, ctx, &mount_info, &setup.parts.assembly.range_bias);
-    // The same lasers, warmer by the calibration's time.
-    setup.sim_options.seconds_since_power_on = mount_info["sim_seconds"].get<double>();
+    // The same lasers, warmer by the warm-up and the calibration's time.
+    setup.sim_options.seconds_since_power_on = mount_info["laser_on_seconds"].get<double>();
   }
   const sim::SimOptions& sim_options = setup.sim_options;
   const sequencer::MissionComponents& parts = setup.parts;

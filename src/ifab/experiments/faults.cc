@@ -114,7 +114,7 @@ nlohmann::json Run(const RunContext& ctx) {
   nlohmann::json mount_info = {{"source", "design"}};
   if (setup.calibrate_mount) {
     setup.parts.T_tool0_arm_laser = CalibrateMount(setup, ctx.seed, ctx, &mount_info, &setup.parts.assembly.range_bias);
-    setup.sim_options.seconds_since_power_on = mount_info["sim_seconds"].get<double>();  // the lasers, warmer
+    setup.sim_options.seconds_since_power_on = mount_info["laser_on_seconds"].get<double>();  // the lasers, warmer
   }
 
   RandomStream rng = RandomStream(ctx.seed).Derive("faults");

@@ -198,11 +198,12 @@ void SweepRecorder::Drain(SweepRecording* rec) {
 LaserCalibrationPlan LaserCalibrationPlan::FromConfig(const ConfigNode& config) {
   config.ExpectMap();
   config.ExpectKeys({"cube_in_base", "cube_size", "sweeps", "scan_posture_deg", "beam_stride", "min_range",
-                     "crop_radius", "calibration", "range_bias"});
+                     "crop_radius", "calibration", "range_bias", "warmup_s"});
   LaserCalibrationPlan plan;
   const auto cb = config["cube_in_base"].AsNumbers(3);
   plan.cube_in_base = Eigen::Vector3d(cb[0], cb[1], DegToRad(cb[2]));
   config.ReadPositive("cube_size", plan.cube_size);
+  config.ReadInRange("warmup_s", plan.warmup_s, 0.0, 86400.0);
   plan.sweeps = ReadSweepSpecs(config["sweeps"]);
   if (plan.sweeps.empty()) config["sweeps"].Fail("at least one sweep");
   plan.scan_posture << 0.0, DegToRad(17.0), DegToRad(17.0), 0.0, DegToRad(69.0), 0.0;

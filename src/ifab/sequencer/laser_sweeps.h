@@ -145,6 +145,10 @@ struct RangeBiasPlan {
 struct LaserCalibrationPlan {
   Eigen::Vector3d cube_in_base{1.70, 0.0, 0.0};  ///< cube centre x, y [m] and yaw [rad] in base, roughly known
   double cube_size{0.25};                        ///< [m] edge length (the paper: about 0.25 m)
+  /// [s] how long the laser is on before the sweeps: a unit's range drifts while it warms up
+  /// (Pomerleau et al. 2012 warm their lasers up before measuring), and the identification cannot
+  /// tell a drift that later fades from a bias that stays.
+  double warmup_s{0.0};
   std::vector<SweepSpec> sweeps;                 ///< the paper: 6-8 sweeps of different joints
   Vector6d scan_posture{Vector6d::Zero()};       ///< [rad] posture aimed by sweeps without a view
                                                  ///< (joints 1 and 5), and the IK seed of views

@@ -27,7 +27,7 @@ double ClippedNormal(RandomStream& rng, double sigma, double limit) {
 }  // namespace
 
 AsBuiltTolerances AsBuiltTolerances::FromConfig(const ConfigNode& root) {
-  root.ExpectKeys({"bricks", "floor", "base", "arm", "lasers", "gripper"});
+  root.ExpectKeys({"bricks", "floor", "base", "arm", "lasers", "gripper", "calibration_cube"});
   AsBuiltTolerances t;
   {
     const ConfigNode b = root["bricks"];
@@ -92,6 +92,12 @@ AsBuiltTolerances AsBuiltTolerances::FromConfig(const ConfigNode& root) {
     g.ReadNonNegative("release_sigma_xy_m", t.release_sigma_xy_m);
     g.ReadNonNegative("release_sigma_per_lean_deg_m", t.release_sigma_per_lean_deg_m);
     g.ReadNonNegative("release_sigma_yaw_deg", t.release_sigma_yaw_deg);
+  }
+  {
+    const ConfigNode c = root["calibration_cube"];
+    c.ExpectKeys({"size_limit_m", "sigma_of_limit"});
+    c.ReadNonNegative("size_limit_m", t.cube_size_limit_m);
+    c.ReadNonNegative("sigma_of_limit", t.cube_size_sigma_of_limit);
   }
   return t;
 }
@@ -203,6 +209,14 @@ AsBuilt DrawAsBuilt(const AsBuiltTolerances& t, const RobotModel& design_robot, 
       for (int k = 0; k < 3; ++k) (*m)[static_cast<std::size_t>(k)] = rng.Normal(t.mount_sigma_m);
       for (int k = 3; k < 6; ++k) (*m)[static_cast<std::size_t>(k)] = DegToRad(rng.Normal(t.mount_sigma_deg));
     }
+  }
+
+  // The calibration cube as machined: each edge its own, within its general tolerance.
+  {
+    RandomStream rng = root.Derive("calibration_cube");
+    const double limit = t.cube_size_limit_m;
+    for (int k = 0; k < 3; ++k)
+      a.cube_size_error[k] = std::clamp(rng.Normal(t.cube_size_sigma_of_limit * limit), -limit, limit);
   }
 
   a.release_sigma_xy = t.release_sigma_xy_m;

@@ -59,6 +59,9 @@ struct AsBuiltTolerances {
   double release_sigma_xy_m{0.0003};
   double release_sigma_per_lean_deg_m{0.001};
   double release_sigma_yaw_deg{0.05};
+  // The calibration cube (ISO 2768-1 general tolerances).
+  double cube_size_limit_m{0.0005};
+  double cube_size_sigma_of_limit{0.333};
 
   /// Read data/sim/as_built.yaml (every section required, unknown keys rejected).
   static AsBuiltTolerances FromConfig(const ConfigNode& root);
@@ -89,6 +92,8 @@ struct AsBuilt {
   std::array<double, 6> base_laser_mount_error{}, arm_laser_mount_error{};
   // Gripper.
   double release_sigma_xy{0.0}, release_sigma_per_lean{0.0}, release_sigma_yaw{0.0};
+  // The calibration cube: its edges' deviation from the drawing's size (x, y, z of its box).
+  Eigen::Vector3d cube_size_error{Eigen::Vector3d::Zero()};  ///< [m]
 
   /// The flange's error at a pose from the kinematic errors alone (offsets and links) [m].
   double FlangeErrorAt(const RobotModel& design, const Vector6d& q) const;
