@@ -170,14 +170,14 @@ struct BaseStateEstimator::Impl {
     }
   }
   // The squared Mahalanobis distance (translation) of a pose for the current scan from the
-  // pose window_gate_distance of odometry travel back chained with the steps since; -1 when
-  // the ring holds no such span.
+  // pose window_gate_distance of odometry travel back (or the chain's start) chained with the
+  // steps since; -1 without a chain.
   double WindowMahalanobisSq(const Pose2& solved, const Eigen::Matrix3d& cov_solved) const {
-    if (!have_last_step || window_count < 2) return -1.0;
+    if (!have_last_step || window_count < 1) return -1.0;
+    // Back to window_gate_distance of travel, or to the chain's start when it is shorter.
     double travel = last_step.translation().norm();
     std::size_t back = 0;  // the span starts at WindowBack(back)
-    while (travel < o.window_gate_distance) {
-      if (back + 1 >= window_count) return -1.0;
+    while (travel < o.window_gate_distance && back + 1 < window_count) {
       travel += WindowBack(back).step.translation().norm();
       ++back;
     }
