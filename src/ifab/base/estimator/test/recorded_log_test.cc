@@ -42,7 +42,10 @@ ScanSpec Sick181() {
 // that the match takes for information along the corridor (ratio ~0.05, not degenerate), and the
 // estimate slides (2.4 m after 20.6 m of odometry). Raw points are kept in carmen.yaml because
 // polylines cost the shared logs accuracy (MIT CSAIL 0.56 m, ACES 1.06 m): an open problem, see
-// README.md. (Its thinning and degeneracy_ratio are replaced too, below.)
+// README.md. (Its thinning and degeneracy_ratio are replaced too, below.) With carmen.yaml as
+// shipped (window gate on) the slide is caught but not cured: 61 of the 100 scans are flagged
+// (the match falls behind the odometry chain over the last metre) and the estimate ends 1.09 m
+// behind the odometry; the open problem is the ripple, not the status.
 TEST(RecordedLog, CorridorFollowsOdometryAlongTheAxisAndReportsTheDegenerateDirection) {
   EstimatorOptions o = RecordedLogOptions();
   o.interpolate_reference = true;
