@@ -389,16 +389,17 @@ nlohmann::json RunEstimateOnLog(const std::string& log_path, const std::string& 
       std::ofstream csv(path);
       IFAB_THROW_UNLESS(static_cast<bool>(csv), "{}: cannot write", path);
       csv << "index,t,t_processing,x,y,theta,status,cov_xx,cov_xy,cov_yy,cov_thth,matched_fraction,"
-             "inlier_fraction,score,mahalanobis_sq,num_degenerate,degenerate_x,degenerate_y,"
+             "inlier_fraction,score,mahalanobis_sq,window_mahalanobis_sq,num_degenerate,degenerate_x,degenerate_y,"
              "degenerate_theta,iterations,ms,log_line\n";
       for (std::size_t k = 0; k < estimates.size(); ++k) {
         const BaseEstimate& e = estimates[k];
         const Eigen::Vector3d d = e.degenerate_directions.col(0);
-        csv << fmt::format("{},{:.6f},{:.6f},{:.6f},{:.6f},{:.6f},{},{:.3e},{:.3e},{:.3e},{:.3e},{:.4f},{:.4f},{:.4f},{:.3f},{},{:.3f},{:.3f},{:.3f},{},{:.4f},{}\n",
+        csv << fmt::format("{},{:.6f},{:.6f},{:.6f},{:.6f},{:.6f},{},{:.3e},{:.3e},{:.3e},{:.3e},{:.4f},{:.4f},{:.4f},{:.3f},{:.3f},{},{:.3f},{:.3f},{:.3f},{},{:.4f},{}\n",
                            k, stamps[k], clock[k], e.T_world_base.x, e.T_world_base.y,
                            e.T_world_base.theta, base::StatusName(e.status), e.covariance(0, 0),
                            e.covariance(0, 1), e.covariance(1, 1), e.covariance(2, 2),
                            e.matched_fraction, e.inlier_fraction, e.score, e.mahalanobis_sq,
+                           e.window_mahalanobis_sq,
                            e.num_degenerate, d.x(), d.y(), d.z(), e.iterations, ms[k],
                            log.scans[k].line);
       }

@@ -131,6 +131,75 @@ struct BaseStateEstimator::Impl {
   std::vector<double> residual_var;
   std::array<double, 4> gate_chi2{};  // chi-square quantile of gate_probability by dof
   std::array<double, 4> chi2_median{};  // chi-square median by dof
+  // The window gate (window_gate_probability): the last scans' final poses and covariances
+  // with the motion step that led to each, in a fixed ring (no allocation per scan).
+  struct WindowEntry {
+    Pose2 pose;
+    Eigen::Matrix3d cov;
+    Pose2 step;  // from the previous entry's pose
+    Eigen::Matrix3d step_cov;
+  };
+  static constexpr std::size_t kWindowCapacity = 256;
+  std::vector<WindowEntry> window_ring;
+  std::size_t window_count{0}, window_head{0};  // head: the slot the next entry goes to
+  bool have_last_step{false};
+  Pose2 last_step;
+  Eigen::Matrix3d last_step_cov{Eigen::Matrix3d::Zero()};
+  double window_chi2{std::numeric_limits<double>::infinity()};
+  const WindowEntry& WindowBack(std::size_t i) const {  // i = 0: the newest
+    return window_ring[(window_head + kWindowCapacity - 1 - i) % kWindowCapacity];
+  }
+  // Before each scan: the previous scan's outcome joins the ring (with an informative step only;
+  // a scan without one breaks the chain).
+  void PushWindow(bool informative, const MotionMeasurement* motion) {
+    if (o.window_gate_probability <= 0.0) return;
+    if (have_last_step) {
+      window_ring[window_head] = WindowEntry{pose, pose_cov, last_step, last_step_cov};
+      window_head = (window_head + 1) % kWindowCapacity;
+      window_count = std::min(window_count + 1, kWindowCapacity);
+    } else if (initialized) {
+      window_ring[window_head] = WindowEntry{pose, pose_cov, Pose2(), Eigen::Matrix3d::Zero()};
+      window_head = (window_head + 1) % kWindowCapacity;
+      window_count = 1;
+    }
+    if (!informative) window_count = 0;
+    have_last_step = informative;
+    if (informative) {
+      last_step = motion->step;
+      last_step_cov = motion->covariance;
+    }
+  }
+  // The squared Mahalanobis distance (translation) of a pose for the current scan from the
+  // pose window_gate_distance of odometry travel back (or the chain's start) chained with the
+  // steps since; -1 without a chain.
+  double WindowMahalanobisSq(const Pose2& solved, const Eigen::Matrix3d& cov_solved) const {
+    if (!have_last_step || window_count < 1) return -1.0;
+    // Back to window_gate_distance of travel, or to the chain's start when it is shorter.
+    double travel = last_step.translation().norm();
+    std::size_t back = 0;  // the span starts at WindowBack(back)
+    while (travel < o.window_gate_distance && back + 1 < window_count) {
+      travel += WindowBack(back).step.translation().norm();
+      ++back;
+    }
+    // Compound from the span's start: its pose and covariance, then each step's.
+    const WindowEntry& start = WindowBack(back);
+    Pose2 T = start.pose;
+    Eigen::Matrix3d C = start.cov;
+    auto compound = [&](const Pose2& step, const Eigen::Matrix3d& step_cov) {
+      const Eigen::Vector2d arm = T.rotation() * step.translation();
+      Eigen::Matrix3d J = Eigen::Matrix3d::Identity();
+      J(0, 2) = -arm.y();
+      J(1, 2) = arm.x();
+      C = J * C * J.transpose() + StepCovarianceInWorld(T, step_cov);
+      T = T * step;
+    };
+    for (std::size_t i = back; i-- > 0;) compound(WindowBack(i).step, WindowBack(i).step_cov);
+    compound(last_step, last_step_cov);
+    const Eigen::Vector2d d = solved.translation() - T.translation();
+    const Eigen::Matrix2d S = (C + cov_solved).topLeftCorner<2, 2>();
+    return d.dot(S.ldlt().solve(d));
+  }
+
   // The identified scale of the motion covariance (see prior_scale_window): a ring of the
   // normalised innovations and a scratch copy for the median.
   double prior_scale{1.0};
@@ -243,6 +312,10 @@ struct BaseStateEstimator::Impl {
           o.gate_probability > 0.0
               ? boost::math::quantile(boost::math::chi_squared(dof), o.gate_probability)
               : std::numeric_limits<double>::infinity();
+    }
+    if (o.window_gate_probability > 0.0) {
+      window_ring.resize(kWindowCapacity);
+      window_chi2 = boost::math::quantile(boost::math::chi_squared(2), o.window_gate_probability);
     }
     solver.options.max_num_iterations = o.max_iterations + 1;  // TinySolver counts from 1
     // Stop when a step is below 1e-4 of the increment so far (the increment is relative to the
@@ -840,6 +913,8 @@ void BaseStateEstimator::Reset(const Pose2& T_world_base, Seconds t, bool keep_r
   m.consecutive_failures = 0;
   m.pose = T_world_base;
   m.pose_cov.setZero();
+  m.window_count = 0;
+  m.have_last_step = false;
   m.t_last = t;
   m.initialized = true;
   m.DropGyroUntil(t - 1e-9);
@@ -924,6 +999,7 @@ const BaseEstimate& BaseStateEstimator::AddScan(const LaserScan& scan,
                 m.prior_scale * StepCovarianceInWorld(m.pose, motion->covariance);
   }
   e.prior_used = informative;
+  m.PushWindow(informative, informative ? &*motion : nullptr);
 
   auto finish_failed = [&](EstimateStatus status) -> const BaseEstimate& {
     e.status = status;
@@ -1076,6 +1152,13 @@ const BaseEstimate& BaseStateEstimator::AddScan(const LaserScan& scan,
                      WrapAngle(x_pred[2] + dx_remapped[2]));
     }
     e.covariance = (deg.info_scan_trusted + info_prior).inverse();
+    if (o.window_gate_probability > 0.0) {
+      // Translation only: the chained heading carries the odometry's turn lag.
+      e.window_mahalanobis_sq = m.WindowMahalanobisSq(solved, e.covariance);
+      if (e.window_mahalanobis_sq > m.window_chi2) {
+        return finish_failed(EstimateStatus::kUnexplainedJump);
+      }
+    }
     m.residual_var[static_cast<std::size_t>(fine)] = residual_var;
   } else {
     const DegeneracyAnalysis deg = AnalyseDegeneracy(info_scan, nullptr, lever, o.degeneracy_ratio);

@@ -173,6 +173,16 @@ struct EstimatorOptions {
   /// odometry heading may lag the scan on fast turns, so the heading innovation is not a
   /// sign of a wrong match there; a match sliding along a corridor shows in the translation.
   bool gate_translation_only{false};
+  /// Window gate (only with an informative motion prior): the match's position against the
+  /// estimate window_gate_distance of odometry travel back chained with the motion steps since
+  /// (their covariance compounded over the span, plus both ends' own), translation only,
+  /// flagged beyond the chi-square (2 dof) quantile of this probability. A match that clings to
+  /// a keyframe while the robot moves falls behind the chain by the whole span's travel, while a
+  /// per-scan jitter or heading lag of the odometry averages out over the span instead of
+  /// rejecting right matches (a per-scan gate does not tell the two apart). 0: off.
+  double window_gate_probability{0.0};
+  /// [m] The window gate's span in odometry travel (at most 256 scans back).
+  double window_gate_distance{1.0};
   /// With an informative prior: the prior alone decides the directions the scan constrains
   /// less than the prior does (Zhang et al.'s solution remapping, see degeneracy.h).
   bool remap_degenerate{true};

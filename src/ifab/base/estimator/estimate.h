@@ -43,6 +43,7 @@ struct BaseEstimate {
   int num_degenerate{0};
   Eigen::Matrix3d degenerate_directions{Eigen::Matrix3d::Zero()};
   double mahalanobis_sq{0.0};      ///< the match's innovation against the prior (0: no prior)
+  double window_mahalanobis_sq{0.0};  ///< the match's translation against the odometry chained since the last keyframe (0: off)
   int gate_dof{0};                 ///< directions the gate tested
   int iterations{0};               ///< LM iterations, summed over rounds and sigma levels
   double cost{0.0};                ///< final cost of eq. 3 (sum of squares / 2)

@@ -53,7 +53,7 @@ EstimatorOptions EstimatorOptions::FromConfig(const ConfigNode& node) {
                    "reseed_after_failures", "max_reference_gap_sigmas", "end_margin_sigmas",
                    "prior_weight", "reference_weighting", "interpolate_reference",
                    "keyframe_capacity", "thinning", "deskew", "min_inlier_fraction",
-                   "gate_probability", "gate_translation_only", "remap_degenerate", "prior_scale_window"});
+                   "gate_probability", "gate_translation_only", "window_gate_probability", "window_gate_distance", "remap_degenerate", "prior_scale_window"});
   node.ReadNonNegative("min_range", o.min_range);
   node.ReadPositive("max_range", o.max_range);
   node.ReadNonNegative("min_point_spacing", o.min_point_spacing);
@@ -97,6 +97,8 @@ EstimatorOptions EstimatorOptions::FromConfig(const ConfigNode& node) {
   node.ReadInRange("min_inlier_fraction", o.min_inlier_fraction, 0.0, 1.0);
   node.ReadInRange("gate_probability", o.gate_probability, 0.0, 1.0 - 1e-12);
   node.Read("gate_translation_only", o.gate_translation_only);
+  node.ReadInRange("window_gate_probability", o.window_gate_probability, 0.0, 1.0 - 1e-12);
+  node.ReadPositive("window_gate_distance", o.window_gate_distance);
   node.Read("remap_degenerate", o.remap_degenerate);
   node.ReadNonNegative("prior_scale_window", o.prior_scale_window);
   const std::string problem = o.Validate();

@@ -42,7 +42,10 @@ ScanSpec Sick181() {
 // that the match takes for information along the corridor (ratio ~0.05, not degenerate), and the
 // estimate slides (2.4 m after 20.6 m of odometry). Raw points are kept in carmen.yaml because
 // polylines cost the shared logs accuracy (MIT CSAIL 0.56 m, ACES 1.06 m): an open problem, see
-// README.md. (Its thinning and degeneracy_ratio are replaced too, below.)
+// README.md. (Its thinning and degeneracy_ratio are replaced too, below.) With carmen.yaml as
+// shipped (window gate on) the slide is caught but not cured: 61 of the 100 scans are flagged
+// (the match falls behind the odometry chain over the last metre) and the estimate ends 1.09 m
+// behind the odometry; the open problem is the ripple, not the status.
 TEST(RecordedLog, CorridorFollowsOdometryAlongTheAxisAndReportsTheDegenerateDirection) {
   EstimatorOptions o = RecordedLogOptions();
   o.interpolate_reference = true;
@@ -95,8 +98,7 @@ TEST(RecordedLog, CorridorFollowsOdometryAlongTheAxisAndReportsTheDegenerateDire
 // match near the prediction is the wrong one (0 m). It must be flagged, fall back to the prior,
 // and not become a keyframe.
 TEST(RecordedLog, MatchToTheWrongOfTwoIdenticalDoorwaysIsFlagged) {
-  EstimatorOptions o = RecordedLogOptions();
-  o.gate_probability = 0.999;  // the gate is off in carmen.yaml (see there); this tests it
+  const EstimatorOptions o = RecordedLogOptions();  // as shipped: the window gate catches it
   const OdometryNoise noise = RecordedLogNoise();
   World world;
   auto wall = [&](double ax, double ay, double bx, double by) {
@@ -130,8 +132,44 @@ TEST(RecordedLog, MatchToTheWrongOfTwoIdenticalDoorwaysIsFlagged) {
   EXPECT_NEAR(e.T_world_base.x, 0.4, 1e-9) << "a flagged match falls back to the prior";
   EXPECT_FALSE(e.keyframe_added);
   EXPECT_EQ(estimator.NumReferenceScans(), references);
-  // The match's own view: it would have put the robot at the first doorway.
-  EXPECT_GT(e.mahalanobis_sq, 16.3);
+  // The match's own view: it would have put the robot at the first doorway, 0.4 m behind the
+  // odometry (chi-square, 2 dof, 0.999: 13.8).
+  EXPECT_GT(e.window_mahalanobis_sq, 13.8);
+}
+
+// ACES's corridor stall in miniature: the robot drives 6 cm a scan (the odometry says so), but
+// what the laser sees moves with it at 80 % of its speed, so the match moves 1.2 cm a scan. A
+// step's shortfall (4.8 cm against the odometry's 1.4 cm sigma) is within a per-scan 0.999 gate
+// (the squared distance ~11 < 13.8); over a metre of travel it is not: the window gate flags it.
+TEST(RecordedLog, MatchThatFallsBehindTheOdometryOverAMetreIsFlagged) {
+  const OdometryNoise noise = RecordedLogNoise();
+  const World world = testing::LRoom();
+  auto run = [&](const EstimatorOptions& o, int* flagged, int* flagged_keyframes) {
+    RandomStream rng(11);
+    BaseStateEstimator estimator(o, Pose2());
+    estimator.Reset(Pose2(), 0.0);
+    estimator.AddScan(CastScan(world, Pose2(), 0.0, Sick181(), &rng));
+    *flagged = *flagged_keyframes = 0;
+    const Pose2 odometry_step(0.06, 0.0, 0.0);
+    for (int k = 1; k <= 40; ++k) {
+      const Pose2 seen(0.2 * 0.06 * k, 0.0, 0.0);  // where the scene says the robot is
+      const BaseEstimate& e = estimator.AddScan(
+          CastScan(world, seen, 0.2 * k, Sick181(), &rng),
+          MotionMeasurement{odometry_step, StepCovariance(odometry_step, noise)});
+      *flagged += e.IsFlagged() ? 1 : 0;
+      *flagged_keyframes += e.IsFlagged() && e.keyframe_added ? 1 : 0;
+    }
+  };
+  const EstimatorOptions shipped = RecordedLogOptions();
+  ASSERT_GT(shipped.window_gate_probability, 0.0);
+  int flagged = 0, flagged_keyframes = 0;
+  run(shipped, &flagged, &flagged_keyframes);
+  EXPECT_GE(flagged, 10) << "of 40 scans, 2.4 m of odometry against 0.5 m of match";
+  EXPECT_EQ(flagged_keyframes, 0);
+  EstimatorOptions no_window = shipped;
+  no_window.window_gate_probability = 0.0;
+  run(no_window, &flagged, &flagged_keyframes);
+  EXPECT_EQ(flagged, 0) << "without the window gate every clinging match passes";
 }
 
 }  // namespace
