@@ -23,6 +23,18 @@ Eigen::Vector2d FloorField::Gradient(double x, double y) const {
   return g;
 }
 
+double FloorField::HeightAndGradient(double x, double y, Eigen::Vector2d* gradient) const {
+  double h = 0.0;
+  Eigen::Vector2d g = Eigen::Vector2d::Zero();
+  for (const Wave& w : waves) {
+    const double a = w.k.x() * x + w.k.y() * y + w.phase;
+    h += w.amplitude * std::sin(a);
+    g += w.amplitude * std::cos(a) * w.k;
+  }
+  *gradient = g;
+  return h;
+}
+
 double FloorField::WorstStep(double distance, const Eigen::Vector2d& lo, const Eigen::Vector2d& hi) const {
   double worst = 0.0;
   const double step = std::max(0.05, std::min(0.25, distance / 4));
@@ -118,8 +130,9 @@ std::optional<WorldHit> World::IntersectGround(const Eigen::Vector3d& o, const E
   // from the flat floor's hit converges in a few steps for any ray steeper than the slope.
   for (int it = 0; it < 8; ++it) {
     const Eigen::Vector3d p = o + t * d;
-    const double f = p.z() - FloorHeight(p.x(), p.y());
-    const double df = d.z() - floor_.Gradient(p.x(), p.y()).dot(d.head<2>());
+    Eigen::Vector2d grad;
+    const double f = p.z() - (site_.ground_z + floor_.HeightAndGradient(p.x(), p.y(), &grad));
+    const double df = d.z() - grad.dot(d.head<2>());
     if (df > -1e-9) return std::nullopt;  // grazing the field: treat as no floor hit
     const double dt = f / df;
     t -= dt;
