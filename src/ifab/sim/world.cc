@@ -9,6 +9,20 @@ namespace {
 
 Pose3 Inverse(const Pose3& p) { return p.inverse(Eigen::Isometry); }
 
+// FloorField's Height and Gradient at once (one sincos per wave: the floor's ray casting needs
+// both at every Newton step; the same sums as the two functions).
+double HeightAndGradient(const FloorField& floor, double x, double y, Eigen::Vector2d* gradient) {
+  double h = 0.0;
+  Eigen::Vector2d g = Eigen::Vector2d::Zero();
+  for (const FloorField::Wave& w : floor.waves) {
+    const double a = w.k.x() * x + w.k.y() * y + w.phase;
+    h += w.amplitude * std::sin(a);
+    g += w.amplitude * std::cos(a) * w.k;
+  }
+  *gradient = g;
+  return h;
+}
+
 }  // namespace
 
 double FloorField::Height(double x, double y) const {
@@ -21,18 +35,6 @@ Eigen::Vector2d FloorField::Gradient(double x, double y) const {
   Eigen::Vector2d g = Eigen::Vector2d::Zero();
   for (const Wave& w : waves) g += w.amplitude * std::cos(w.k.x() * x + w.k.y() * y + w.phase) * w.k;
   return g;
-}
-
-double FloorField::HeightAndGradient(double x, double y, Eigen::Vector2d* gradient) const {
-  double h = 0.0;
-  Eigen::Vector2d g = Eigen::Vector2d::Zero();
-  for (const Wave& w : waves) {
-    const double a = w.k.x() * x + w.k.y() * y + w.phase;
-    h += w.amplitude * std::sin(a);
-    g += w.amplitude * std::cos(a) * w.k;
-  }
-  *gradient = g;
-  return h;
 }
 
 double FloorField::WorstStep(double distance, const Eigen::Vector2d& lo, const Eigen::Vector2d& hi) const {
@@ -131,7 +133,7 @@ std::optional<WorldHit> World::IntersectGround(const Eigen::Vector3d& o, const E
   for (int it = 0; it < 8; ++it) {
     const Eigen::Vector3d p = o + t * d;
     Eigen::Vector2d grad;
-    const double f = p.z() - (site_.ground_z + floor_.HeightAndGradient(p.x(), p.y(), &grad));
+    const double f = p.z() - (site_.ground_z + HeightAndGradient(floor_, p.x(), p.y(), &grad));
     const double df = d.z() - grad.dot(d.head<2>());
     if (df > -1e-9) return std::nullopt;  // grazing the field: treat as no floor hit
     const double dt = f / df;

@@ -26,8 +26,6 @@ struct FloorField {
   double Height(double x, double y) const;
   /// d(height)/dx, d(height)/dy.
   Eigen::Vector2d Gradient(double x, double y) const;
-  /// Both at once (one sincos per wave: the floor's ray casting needs both at every Newton step).
-  double HeightAndGradient(double x, double y, Eigen::Vector2d* gradient) const;
   /// The DIN 18202 step measure over points `distance` apart: the largest deviation of the floor
   /// at a chord's midpoint from the straight line through its ends, over a grid of chords in the
   /// box [lo, hi] [m].
