@@ -13,8 +13,10 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
 
 #include "ifab/core/error.h"
+#include "ifab/perception/dense_lm.h"
 #include "ifab/perception/residuals.h"
 
 namespace ifab::internal {
@@ -22,7 +24,9 @@ namespace {
 
 using Params = std::array<double, 6>;  // [t, w] about R0
 
-constexpr int kChunk = 256;  // points per Ceres residual block
+constexpr int kChunk = 256;  // points per Ceres residual block, and per unit of (parallel) evaluation
+
+using Vector6 = Eigen::Matrix<double, 6, 1>;
 // The norm of 3 whitened components (kClosest) has median 1.538 (chi, 3 dof), 2.28 times that of
 // one |N(0, 1)|: divided by this, the robust spread and the gate read as for one component.
 constexpr double kChi3MedianRatio = 2.2806;
@@ -174,6 +178,91 @@ class StepPrior final : public ceres::SizedCostFunction<6, 6> {
   double w_[6];
 };
 
+// Up to 3 residuals of one point and their Jacobian rows (row-major n x 6) with respect to the
+// laser mount (calibration) and the point's body.
+struct PointTerms {
+  int n{0};
+  double r[3];
+  Eigen::Matrix<double, 3, 6, Eigen::RowMajor> J_laser, J_body;
+};
+
+// Registration: a fixed ray p_base against the body pose.
+void RegistrationTerms(const PointMatch& m, const ScenePrimitive* prim, const RayT<double>& ray,
+                       const PoseJacobianData& XB, bool jacobians, PointTerms& out) {
+  out.n = PointResidualAnalytic(m, prim, ray, XB, out.r, jacobians ? out.J_body.data() : nullptr);
+}
+
+// Calibration: eq. 6 inside eq. 7, the mount and the body pose both free. Hand-derived Jacobians
+// (residuals.h, checked against autodiff) or Ceres autodiff through the templated residuals.
+void CalibrationTerms(const PointMatch& m, const ScenePrimitive* prim, const SweepPoint& s, const PoseJacobianData& XL,
+                      const PoseJacobianData& XB, bool jacobians, PointTerms& out) {
+  using Row3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+  const LaserRayJacobian lr = LaserRayWithJacobian(XL, s.T_base_tool0, s.p_laser);
+  RayJacobian rj;
+  out.n = PointResidualAnalytic(m, prim, lr.ray, XB, out.r, jacobians ? out.J_body.data() : nullptr,
+                                jacobians ? &rj : nullptr);
+  if (jacobians && out.n > 0)
+    out.J_laser.topRows(out.n) = Eigen::Map<const Row3>(rj.d_origin, out.n, 3) * lr.d_origin +
+                                 Eigen::Map<const Row3>(rj.d_direction, out.n, 3) * lr.d_direction;
+}
+
+void CalibrationTermsAutodiff(const PointMatch& m, const ScenePrimitive* prim, const SweepPoint& s,
+                              const double* xl, const Eigen::Matrix3d& R0_laser, const double* xb,
+                              const Eigen::Matrix3d& R0_body, bool jacobians, PointTerms& out) {
+  if (!jacobians) {
+    const PoseT<double> XL(xl, R0_laser), XB(xb, R0_body);
+    out.n = PointResidual<double>(m, prim, LaserRay<double>(XL, s.T_base_tool0, s.p_laser), XB, out.r);
+    return;
+  }
+  using J = ceres::Jet<double, 12>;
+  J xlj[6], xbj[6];
+  for (int k = 0; k < 6; ++k) {
+    xlj[k] = J(xl[k], k);
+    xbj[k] = J(xb[k], 6 + k);
+  }
+  const PoseT<J> XLj(xlj, R0_laser), XBj(xbj, R0_body);
+  J r[3];
+  out.n = PointResidual<J>(m, prim, LaserRay<J>(XLj, s.T_base_tool0, s.p_laser), XBj, r);
+  for (int k = 0; k < out.n; ++k) {
+    out.r[k] = r[k].a;
+    for (int c = 0; c < 6; ++c) {
+      out.J_laser(k, c) = r[k].v[c];
+      out.J_body(k, c) = r[k].v[6 + c];
+    }
+  }
+}
+
+// Sums over a run of points of one body: 0.5 |r|^2, J^T J and J^T r by block.
+struct BodyAccumulator {
+  double cost{0.0};
+  Matrix6d H_body{Matrix6d::Zero()}, H_laser{Matrix6d::Zero()}, H_laser_body{Matrix6d::Zero()};
+  Vector6 g_body{Vector6::Zero()}, g_laser{Vector6::Zero()};
+
+  void Add(const PointTerms& t, bool jacobians, bool laser) {
+    for (int k = 0; k < t.n; ++k) {
+      cost += 0.5 * t.r[k] * t.r[k];
+      if (!jacobians) continue;
+      const Vector6 jb = t.J_body.row(k).transpose();
+      H_body.noalias() += jb * jb.transpose();
+      g_body += t.r[k] * jb;
+      if (laser) {
+        const Vector6 jl = t.J_laser.row(k).transpose();
+        H_laser.noalias() += jl * jl.transpose();
+        H_laser_body.noalias() += jl * jb.transpose();
+        g_laser += t.r[k] * jl;
+      }
+    }
+  }
+  void Add(const BodyAccumulator& o) {
+    cost += o.cost;
+    H_body += o.H_body;
+    H_laser += o.H_laser;
+    H_laser_body += o.H_laser_body;
+    g_body += o.g_body;
+    g_laser += o.g_laser;
+  }
+};
+
 double RobustWeight(RobustLoss loss, double scale, double whitened) {
   const double a = std::abs(whitened);
   switch (loss) {
@@ -198,6 +287,15 @@ class Engine {
     gate_out_.assign(n, 0);
     labels_.resize(n);
     flagged_.resize(n);
+    if (!calibrating_) {
+      // Registration: the cloud is fixed, so each point's ray is computed once for all steps.
+      rays_.resize(n);
+      for (std::size_t i = 0; i < n; ++i) {
+        const RayPoint& rp = (*input.cloud)[i];
+        const double range = rp.Range();
+        rays_[i] = {rp.origin, range > 0.0 ? Eigen::Vector3d((rp.p - rp.origin) / range) : Eigen::Vector3d::UnitX(), range};
+      }
+    }
   }
 
   PoseProblemOutput Run() {
@@ -252,6 +350,16 @@ class Engine {
            step.max_rotation < 10.0 * options_.rotation_tolerance) ||
           3 * (it + 1) >= options_.max_iterations)
         scale_frozen_ = gate_held_ = true;
+      if (ReturnedToStart()) {
+        // A restart trial back within 10x the tolerances of the result it is tried against (the
+        // threshold at which the coarse phase and the noise scale count steps as small): the
+        // steps left would only polish the same minimum again, so it cannot win.
+        out.returned = true;
+        s.status = RegistrationStatus::kConverged;
+        s.message = fmt::format("returned to the restarted result in {} correspondence steps", it + 1);
+        s.iterations = it + 1;
+        return out;
+      }
       if (step.max_translation < options_.translation_tolerance && step.max_rotation < options_.rotation_tolerance) {
         s.status = RegistrationStatus::kConverged;
         s.message = fmt::format("converged in {} correspondence steps", it + 1);
@@ -271,6 +379,7 @@ class Engine {
       s.status = RegistrationStatus::kConverged;
       s.message = "no free body: poses held";
     }
+    flag_all_ = true;
     Match();  // labels and weights at the final poses
     Finish(out, start);
     return out;
@@ -290,6 +399,18 @@ class Engine {
   Eigen::VectorXd previous_delta_;
   double relaxation_{1.0};
   int stride_{1};  // points used by the correspondence steps (coarse_stride, then 1)
+
+  bool ReturnedToStart() const {
+    if (input_.return_to == nullptr) return false;
+    const auto& to = *input_.return_to;
+    for (std::size_t k = 0; k < poses_.size() && k < to.size(); ++k) {
+      if (!bodies_[k].free) continue;
+      if (TranslationDistance(poses_[k], to[k]) > 10.0 * options_.translation_tolerance ||
+          RotationAngle(poses_[k], to[k]) > 10.0 * options_.rotation_tolerance)
+        return false;
+    }
+    return true;
+  }
 
   int CyclePeriod() {
     std::vector<Pose3> now = poses_;
@@ -366,14 +487,41 @@ class Engine {
       return;
     }
     const Eigen::Vector3d u = (rp.p - rp.origin) / range;
-    const Scene::Nearest near = scene_.Closest(rp.p);
-    if (near.primitive < 0 || (options_.max_distance > 0.0 && near.distance > options_.max_distance)) {
+    // The closest primitive and the edge test are the costly questions; each is asked only when
+    // its answer can change the match (the final Match asks the edge test of every point, for the
+    // summary's count). The matches are the same as when both are asked of every point.
+    std::optional<Scene::Nearest> nearest;
+    auto near_point = [&]() -> const Scene::Nearest& {
+      if (!nearest) nearest = scene_.Closest(rp.p);
+      return *nearest;
+    };
+    auto too_far = [&] {
+      const Scene::Nearest& n = near_point();
+      return n.primitive < 0 || (options_.max_distance > 0.0 && n.distance > options_.max_distance);
+    };
+    bool flag_known = false;
+    auto flagged = [&] {
+      if (!flag_known) {
+        flagged_[i] = options_.shadow_points &&
+                      scene_.RayPassesNearEdge(rp.origin, u, range + options_.shadow_edge_distance,
+                                               options_.shadow_edge_distance);
+        flag_known = true;
+      }
+      return static_cast<bool>(flagged_[i]);
+    };
+    std::optional<Scene::Hit> hit;
+    if (options_.residual == RegistrationResidual::kRay) {
+      const double reach = options_.max_distance > 0.0 ? options_.max_distance : 1.0;
+      hit = scene_.CastRay(rp.origin, u, range + reach);
+    }
+    // A hit within max_distance of the point along the ray bounds its distance to the model, so
+    // the closest primitive need not be asked to know the point is near enough.
+    const bool near_by_hit = hit && (options_.max_distance <= 0.0 || std::abs(range - hit->t) <= options_.max_distance);
+    if (!near_by_hit && too_far()) {
       matches_[i] = m;
       return;
     }
-    flagged_[i] = options_.shadow_points &&
-                  scene_.RayPassesNearEdge(rp.origin, u, range + options_.shadow_edge_distance,
-                                           options_.shadow_edge_distance);
+    if (flag_all_) flagged();
     double whitened = 0.0;
     if (options_.residual == RegistrationResidual::kRay) {
       // The face the ray hits first explains the point by its range (kRange). Near an edge
@@ -389,6 +537,7 @@ class Engine {
         double signed_distance{0.0}, error{0.0}, sigma{1.0};
       };
       auto closest_candidate = [&] {
+        const Scene::Nearest& near = near_point();
         Candidate k;
         k.primitive = near.primitive;
         k.x = near.point;
@@ -399,8 +548,6 @@ class Engine {
         k.sigma = std::sqrt(noise_.NormalVariance(u, range, k.n));
         return k;
       };
-      const double reach = options_.max_distance > 0.0 ? options_.max_distance : 1.0;
-      const auto hit = scene_.CastRay(rp.origin, u, range + reach);
       Candidate chosen;
       if (hit) {
         chosen.primitive = hit->primitive;
@@ -414,7 +561,7 @@ class Engine {
         chosen.error = std::abs(chosen.signed_distance) / c;
         chosen.sigma = std::sqrt(noise_.NormalVariance(u, range, chosen.n)) / c;
         const bool off = chosen.error > options_.shadow_distance && chosen.error > options_.shadow_sigmas * chosen.sigma;
-        if (flagged_[i] && off) {
+        if (off && flagged()) {
           const Candidate other = closest_candidate();
           if (other.primitive == chosen.primitive ||
               (other.error > options_.shadow_distance && other.error > options_.shadow_sigmas * other.sigma)) {
@@ -455,7 +602,8 @@ class Engine {
       whitened = chosen.signed_distance / normal_sigma;
     } else {
       // Eq. 7 and the paper's shadow rule: flagged and far from the closest primitive: zero error.
-      if (flagged_[i] && near.distance > options_.shadow_distance) {
+      const Scene::Nearest& near = near_point();
+      if (near.distance > options_.shadow_distance && flagged()) {
         labels_[i] = PointLabel::kShadow;
         matches_[i] = m;
         return;
@@ -584,8 +732,186 @@ class Engine {
     return b;
   }
 
-  StepResult Step() {
-    StepResult r;
+  // The least-squares problem of one correspondence step: the informative points grouped by body,
+  // and the free parameter blocks (6 each: the laser first when calibrating, then the free bodies).
+  struct StepProblem {
+    std::vector<Params> x0;  // every body at the step's start ([t, 0] about R0)
+    Params x0_laser{};
+    std::vector<Eigen::Matrix3d> R0;
+    Eigen::Matrix3d R0_laser{Eigen::Matrix3d::Identity()};
+    std::vector<std::vector<std::size_t>> points;  // per body: its informative points
+    struct Chunk {
+      std::size_t body, begin, end;
+    };
+    std::vector<Chunk> chunks;
+    int laser_block{-1};          // offset of the laser's block in x, -1 held
+    std::vector<int> body_block;  // per body: offset of its block in x, -1 held
+    std::vector<int> block_body;  // per block: its body, -1 the laser
+    int num_parameters{0};
+    int num_residuals{0};
+    bool priors{false};  // damp the step: (x - x0) / step sigma per free block
+    std::vector<char> held;  // per parameter: held at its start (a body's fixed components; step problems only)
+
+    Eigen::VectorXd Start() const {
+      Eigen::VectorXd x(num_parameters);
+      if (laser_block >= 0) x.segment<6>(laser_block) = Eigen::Map<const Vector6>(x0_laser.data());
+      for (std::size_t k = 0; k < x0.size(); ++k)
+        if (body_block[k] >= 0) x.segment<6>(body_block[k]) = Eigen::Map<const Vector6>(x0[k].data());
+      return x;
+    }
+    Params Laser(const Eigen::VectorXd& x) const { return laser_block < 0 ? x0_laser : Block(x, laser_block); }
+    Params Body(const Eigen::VectorXd& x, std::size_t k) const {
+      return body_block[k] < 0 ? x0[k] : Block(x, body_block[k]);
+    }
+    static Params Block(const Eigen::VectorXd& x, int offset) {
+      Params p;
+      for (int c = 0; c < 6; ++c) p[static_cast<std::size_t>(c)] = x[offset + c];
+      return p;
+    }
+  };
+
+  // stride: every stride-th informative point (coarse steps); the information uses all.
+  StepProblem MakeStepProblem(bool with_priors, int stride = 1) const {
+    StepProblem p;
+    p.priors = with_priors;
+    p.x0.resize(poses_.size());
+    p.R0.resize(poses_.size());
+    for (std::size_t k = 0; k < poses_.size(); ++k) {
+      p.x0[k] = ParamsAt(poses_[k]);
+      p.R0[k] = poses_[k].linear();
+    }
+    p.x0_laser = ParamsAt(laser_);
+    p.R0_laser = laser_.linear();
+    p.points.resize(poses_.size());
+    for (std::size_t i = 0; i < matches_.size(); i += static_cast<std::size_t>(stride)) {
+      if (labels_[i] != PointLabel::kInlier) continue;
+      const auto k = static_cast<std::size_t>(matches_[i].body);
+      p.points[k].push_back(i);
+      p.num_residuals += matches_[i].NumResiduals();
+    }
+    for (std::size_t k = 0; k < poses_.size(); ++k)
+      for (std::size_t c = 0; c < p.points[k].size(); c += kChunk)
+        p.chunks.push_back({k, c, std::min(p.points[k].size(), c + kChunk)});
+    if (calibrating_) {
+      p.laser_block = p.num_parameters;
+      p.block_body.push_back(-1);
+      p.num_parameters += 6;
+    }
+    p.body_block.assign(poses_.size(), -1);
+    for (std::size_t k = 0; k < poses_.size(); ++k) {
+      if (!bodies_[k].free) continue;
+      p.body_block[k] = p.num_parameters;
+      p.block_body.push_back(static_cast<int>(k));
+      p.num_parameters += 6;
+    }
+    p.held.assign(static_cast<std::size_t>(p.num_parameters), 0);
+    if (with_priors)  // (the information is wanted over all 6 components)
+      for (std::size_t b = 0; b < p.block_body.size(); ++b)
+        for (int c = 0; c < 6; ++c)
+          p.held[6 * b + static_cast<std::size_t>(c)] =
+              p.block_body[b] >= 0 && bodies_[static_cast<std::size_t>(p.block_body[b])].fixed[static_cast<std::size_t>(c)];
+    return p;
+  }
+
+  // 0.5 |r(x)|^2 of the step problem and, when H and g are given (sized and zeroed), J^T J and
+  // J^T r over its free blocks, accumulated point by point (the Jacobian is never stored). Chunks
+  // are summed in a fixed order, so the result does not depend on the number of threads.
+  bool Evaluate(const StepProblem& p, const Eigen::VectorXd& x, double* cost, Eigen::MatrixXd* H, Eigen::VectorXd* g) const {
+    const bool jacobians = H != nullptr;
+    const Params xl = p.Laser(x);
+    const PoseJacobianData XL(xl.data(), p.R0_laser);
+    std::vector<Params> xb(poses_.size());
+    std::vector<PoseJacobianData> XB;
+    XB.reserve(poses_.size());
+    for (std::size_t k = 0; k < poses_.size(); ++k) {
+      xb[k] = p.Body(x, k);
+      XB.emplace_back(xb[k].data(), p.R0[k]);
+    }
+    const bool laser_free = p.laser_block >= 0;
+    std::vector<BodyAccumulator> sums(p.chunks.size());
+    auto run = [&](std::size_t c) {
+      const auto& chunk = p.chunks[c];
+      const std::size_t k = chunk.body;
+      BodyAccumulator& acc = sums[c];
+      PointTerms t;
+      for (std::size_t j = chunk.begin; j < chunk.end; ++j) {
+        const std::size_t i = p.points[k][j];
+        const PointMatch& m = matches_[i];
+        const ScenePrimitive* prim = m.primitive >= 0 ? &scene_.primitives()[static_cast<std::size_t>(m.primitive)] : nullptr;
+        if (!calibrating_) {
+          RegistrationTerms(m, prim, rays_[i], XB[k], jacobians, t);
+        } else if (input_.autodiff) {
+          CalibrationTermsAutodiff(m, prim, (*input_.sweep)[i], xl.data(), p.R0_laser, xb[k].data(), p.R0[k], jacobians, t);
+        } else {
+          CalibrationTerms(m, prim, (*input_.sweep)[i], XL, XB[k], jacobians, t);
+        }
+        acc.Add(t, jacobians, laser_free);
+      }
+    };
+    if (options_.num_threads > 1 && p.chunks.size() > 1) {
+      tbb::task_arena arena(options_.num_threads);
+      arena.execute([&] {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, p.chunks.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+          for (std::size_t c = r.begin(); c != r.end(); ++c) run(c);
+        });
+      });
+    } else {
+      for (std::size_t c = 0; c < p.chunks.size(); ++c) run(c);
+    }
+    std::vector<BodyAccumulator> body_sums(poses_.size());
+    for (std::size_t c = 0; c < p.chunks.size(); ++c) body_sums[p.chunks[c].body].Add(sums[c]);
+    *cost = 0.0;
+    for (std::size_t k = 0; k < poses_.size(); ++k) {
+      const BodyAccumulator& a = body_sums[k];
+      *cost += a.cost;
+      if (!jacobians) continue;
+      const int ob = p.body_block[k], ol = p.laser_block;
+      if (ob >= 0) {
+        H->block<6, 6>(ob, ob) += a.H_body;
+        g->segment<6>(ob) += a.g_body;
+      }
+      if (ol >= 0) {
+        H->block<6, 6>(ol, ol) += a.H_laser;
+        g->segment<6>(ol) += a.g_laser;
+        if (ob >= 0) {
+          H->block<6, 6>(ol, ob) += a.H_laser_body;
+          H->block<6, 6>(ob, ol) += a.H_laser_body.transpose();
+        }
+      }
+    }
+    if (p.priors) {
+      // Damping of one step: (x - x_start) / sigma. Re-centred every step, so it holds directions
+      // the data leave free without pulling the others (the data's information is many orders larger).
+      const Eigen::VectorXd d = x - p.Start();
+      for (int c = 0; c < p.num_parameters; ++c) {
+        const double sigma = c % 6 < 3 ? options_.step_sigma_translation : options_.step_sigma_rotation;
+        const double w2 = 1.0 / (sigma * sigma);
+        *cost += 0.5 * w2 * d[c] * d[c];
+        if (jacobians) {
+          (*H)(c, c) += w2;
+          (*g)[c] += w2 * d[c];
+        }
+      }
+    }
+    if (jacobians) {
+      // Held components (a SubsetManifold in Ceres's terms): no gradient, no coupling, unit
+      // curvature, so every LM step leaves them at their start and moves the rest as the
+      // reduced problem would.
+      for (int c = 0; c < p.num_parameters; ++c) {
+        if (!p.held[static_cast<std::size_t>(c)]) continue;
+        H->row(c).setZero();
+        H->col(c).setZero();
+        (*H)(c, c) = 1.0;
+        (*g)[c] = 0.0;
+      }
+    }
+    return std::isfinite(*cost);
+  }
+
+  // One step's solve with the Ceres problem (options.solver = ceres): the reference the
+  // normal-equation solve is tested against.
+  bool SolveWithCeres(std::vector<Params>& x_body, Params& x_laser, std::vector<Eigen::Matrix3d>& R0,
+                      Eigen::Matrix3d& R0_laser, std::string& message) {
     Built b = Build(/*with_priors=*/true, stride_);
     ceres::Solver::Options so;
     so.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
@@ -599,8 +925,53 @@ class Engine {
     ceres::Solve(so, b.problem.get(), &summary);
     spdlog::debug("registration step: {}", summary.BriefReport());
     if (!summary.IsSolutionUsable()) {
+      message = "Ceres: " + summary.message;
+      return false;
+    }
+    x_body = b.x;
+    x_laser = b.x_laser;
+    R0 = b.R0;
+    R0_laser = b.R0_laser;
+    return true;
+  }
+
+  // The same step by LM on normal equations accumulated point by point (dense_lm.h).
+  bool SolveNormalEquations(std::vector<Params>& x_body, Params& x_laser, std::vector<Eigen::Matrix3d>& R0,
+                            Eigen::Matrix3d& R0_laser, std::string& message) {
+    const StepProblem p = MakeStepProblem(/*with_priors=*/true, stride_);
+    DenseLmOptions lm;
+    lm.max_iterations = options_.max_solver_iterations;
+    Eigen::VectorXd x = p.Start();
+    const DenseLmSummary summary = SolveDenseLm(
+        [&](const Eigen::VectorXd& at, double* cost, Eigen::MatrixXd* H, Eigen::VectorXd* g) {
+          return Evaluate(p, at, cost, H, g);
+        },
+        x, lm);
+    spdlog::debug("registration step: {} ({} iterations, cost {:.6g} -> {:.6g})", summary.message, summary.iterations,
+                  summary.initial_cost, summary.final_cost);
+    if (!summary.usable) {
+      message = "solver: " + summary.message;
+      return false;
+    }
+    x_laser = p.Laser(x);
+    x_body.resize(poses_.size());
+    for (std::size_t k = 0; k < poses_.size(); ++k) x_body[k] = p.Body(x, k);
+    R0 = p.R0;
+    R0_laser = p.R0_laser;
+    return true;
+  }
+
+  StepResult Step() {
+    StepResult r;
+    std::vector<Params> x_body;
+    Params x_laser{};
+    std::vector<Eigen::Matrix3d> R0;
+    Eigen::Matrix3d R0_laser;
+    const bool solved_ok = options_.solver == LeastSquaresSolver::kCeres
+                               ? SolveWithCeres(x_body, x_laser, R0, R0_laser, r.message)
+                               : SolveNormalEquations(x_body, x_laser, R0, R0_laser, r.message);
+    if (!solved_ok) {
       r.ok = false;
-      r.message = "Ceres: " + summary.message;
       return r;
     }
     // The solved step as one vector (translations, rotations at a 0.1 m lever). When it turns
@@ -614,9 +985,9 @@ class Engine {
         solved.push_back(laser ? laser_ : poses_[k]);
         continue;
       }
-      const Params& x = laser ? b.x_laser : b.x[k];
+      const Params& x = laser ? x_laser : x_body[k];
       const Pose3& before = laser ? laser_ : poses_[k];
-      solved.push_back(ApplyParams(x, laser ? b.R0_laser : b.R0[k]));
+      solved.push_back(ApplyParams(x, laser ? R0_laser : R0[k]));
       delta.segment<3>(6 * static_cast<Eigen::Index>(k)) = solved.back().translation() - before.translation();
       delta.segment<3>(6 * static_cast<Eigen::Index>(k) + 3) = 0.1 * Eigen::Vector3d(x[3], x[4], x[5]);
     }
@@ -702,35 +1073,22 @@ class Engine {
     s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
 
-  // Cost, covariance and unconstrained directions at the final poses from J^T J.
-  void Information(PoseProblemOutput& out) {
-    RegistrationSummary& s = out.summary;
+  // Cost and J^T J at the final poses from the Ceres problem (options.solver = ceres).
+  void InformationWithCeres(double& cost, int& num_residuals, std::vector<int>& block_body, Eigen::MatrixXd& H) {
     Built b = Build(/*with_priors=*/false);
     ceres::Problem::EvaluateOptions eo;
     eo.parameter_blocks = b.free_blocks;
     eo.apply_loss_function = false;
-    double cost = 0.0;
     ceres::CRSMatrix crs;
     if (b.free_blocks.empty()) {
       b.problem->Evaluate(ceres::Problem::EvaluateOptions(), &cost, nullptr, nullptr, nullptr);
     } else {
       b.problem->Evaluate(eo, &cost, nullptr, nullptr, &crs);
     }
-    s.cost = cost;
-    s.rms_whitened = b.num_residuals > 0 ? std::sqrt(2.0 * cost / b.num_residuals) : 0.0;
-    if (b.free_blocks.empty()) return;
+    num_residuals = b.num_residuals;
+    block_body = b.block_body;
     const int n = static_cast<int>(b.free_blocks.size()) * 6;
-    // Held components are no parameters; the rest are scaled to the residuals' actual spread (the
-    // a-posteriori variance factor), so error bars widen when the noise model is too optimistic.
-    std::vector<char> held(static_cast<std::size_t>(n), 0);
-    for (std::size_t k = 0; k < b.free_blocks.size(); ++k)
-      for (int c = 0; c < 6; ++c)
-        held[k * 6 + static_cast<std::size_t>(c)] =
-            b.block_body[k] >= 0 && bodies_[static_cast<std::size_t>(b.block_body[k])].fixed[static_cast<std::size_t>(c)];
-    num_residuals_ = b.num_residuals;
-    num_parameters_ = n - static_cast<int>(std::count(held.begin(), held.end(), 1));
-    const double s0_squared = b.num_residuals > num_parameters_ ? 2.0 * cost / (b.num_residuals - num_parameters_) : 1.0;
-    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(n, n);
+    H = Eigen::MatrixXd::Zero(n, n);
     for (int row = 0; row < crs.num_rows; ++row) {
       for (int a = crs.rows[static_cast<std::size_t>(row)]; a < crs.rows[static_cast<std::size_t>(row) + 1]; ++a) {
         for (int c = a; c < crs.rows[static_cast<std::size_t>(row) + 1]; ++c) {
@@ -741,6 +1099,39 @@ class Engine {
         }
       }
     }
+  }
+
+  // Cost, covariance and unconstrained directions at the final poses from J^T J.
+  void Information(PoseProblemOutput& out) {
+    RegistrationSummary& s = out.summary;
+    double cost = 0.0;
+    int num_residuals = 0;
+    std::vector<int> block_body;
+    Eigen::MatrixXd H;
+    if (options_.solver == LeastSquaresSolver::kCeres) {
+      InformationWithCeres(cost, num_residuals, block_body, H);
+    } else {
+      const StepProblem p = MakeStepProblem(/*with_priors=*/false);
+      H = Eigen::MatrixXd::Zero(p.num_parameters, p.num_parameters);
+      Eigen::VectorXd g = Eigen::VectorXd::Zero(p.num_parameters);
+      Evaluate(p, p.Start(), &cost, &H, &g);
+      num_residuals = p.num_residuals;
+      block_body = p.block_body;
+    }
+    s.cost = cost;
+    s.rms_whitened = num_residuals > 0 ? std::sqrt(2.0 * cost / num_residuals) : 0.0;
+    if (block_body.empty()) return;
+    const int n = static_cast<int>(block_body.size()) * 6;
+    // Held components are no parameters; the rest are scaled to the residuals' actual spread (the
+    // a-posteriori variance factor), so error bars widen when the noise model is too optimistic.
+    std::vector<char> held(static_cast<std::size_t>(n), 0);
+    for (std::size_t k = 0; k < block_body.size(); ++k)
+      for (int c = 0; c < 6; ++c)
+        held[k * 6 + static_cast<std::size_t>(c)] =
+            block_body[k] >= 0 && bodies_[static_cast<std::size_t>(block_body[k])].fixed[static_cast<std::size_t>(c)];
+    num_residuals_ = num_residuals;
+    num_parameters_ = n - static_cast<int>(std::count(held.begin(), held.end(), 1));
+    const double s0_squared = num_residuals > num_parameters_ ? 2.0 * cost / (num_residuals - num_parameters_) : 1.0;
     if (s0_squared > 0.0) H /= s0_squared;
     Eigen::VectorXd prior(n);
     for (int k = 0; k < n; ++k) {
@@ -750,7 +1141,7 @@ class Engine {
     }
     const Eigen::MatrixXd H_reg = H + Eigen::MatrixXd(prior.asDiagonal());
     const Eigen::MatrixXd covariance = H_reg.ldlt().solve(Eigen::MatrixXd::Identity(n, n));
-    for (std::size_t k = 0; k < b.free_blocks.size(); ++k) {
+    for (std::size_t k = 0; k < block_body.size(); ++k) {
       const int o = static_cast<int>(k) * 6;
       // Marginal information of this block: Schur complement over the others (regularised).
       Matrix6d marginal = H.block(o, o, 6, 6);
@@ -766,7 +1157,7 @@ class Engine {
         }
         marginal -= H_kr * H_rr.ldlt().solve(H_kr.transpose());
       }
-      const int body = b.block_body[k];
+      const int body = block_body[k];
       const double extent = body < 0 ? input_.laser_extent : scene_.Extent(body);
       const auto free_dirs = UnconstrainedDirections(marginal, extent, options_.unconstrained_std);
       Matrix6d cov = covariance.block(o, o, 6, 6);
@@ -800,6 +1191,8 @@ class Engine {
   int num_residuals_{0}, num_parameters_{0};
   std::vector<PointLabel> labels_;
   std::vector<char> flagged_;
+  std::vector<RayT<double>> rays_;  // registration: each point's ray (origin, unit direction, range)
+  bool flag_all_{false};  // ask every point's edge test (the final Match: the summary counts them)
 };
 
 }  // namespace

@@ -23,7 +23,7 @@ Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
 }  // namespace
 
 RegistrationOptions RegistrationOptions::FromConfig(const ConfigNode& c, RegistrationOptions o) {
-  c.ExpectKeys({"noise", "noise_source", "gate_sigmas", "fit_tolerance", "convergence", "residual", "max_iterations", "coarse_stride", "max_solver_iterations", "translation_tolerance",
+  c.ExpectKeys({"noise", "noise_source", "gate_sigmas", "fit_tolerance", "convergence", "residual", "max_iterations", "coarse_stride", "max_solver_iterations", "solver", "translation_tolerance",
                 "rotation_tolerance", "shadow_points", "shadow_edge_distance", "shadow_distance", "shadow_sigmas", "max_distance", "max_incidence_deg", "min_incidence_deg",
                 "loss", "loss_scale", "step_sigma_translation", "step_sigma_rotation", "restarts", "restart_distance", "prior_sigma_translation", "prior_sigma_rotation", "unconstrained_std",
                 "num_threads"});
@@ -55,6 +55,12 @@ RegistrationOptions RegistrationOptions::FromConfig(const ConfigNode& c, Registr
   c.ReadPositive("max_iterations", o.max_iterations);
   c.ReadPositive("coarse_stride", o.coarse_stride);
   c.ReadPositive("max_solver_iterations", o.max_solver_iterations);
+  if (auto v = c.Find("solver")) {
+    const auto t = v->As<std::string>();
+    if (t == "normal_equations") o.solver = LeastSquaresSolver::kNormalEquations;
+    else if (t == "ceres") o.solver = LeastSquaresSolver::kCeres;
+    else v->Fail("one of: normal_equations (LM on accumulated J^T J), ceres (a Ceres problem, the reference)");
+  }
   c.ReadPositive("translation_tolerance", o.translation_tolerance);
   c.ReadPositive("rotation_tolerance", o.rotation_tolerance);
   c.Read("shadow_points", o.shadow_points);
@@ -145,10 +151,12 @@ RegistrationSummary Register(const std::vector<RayPoint>& cloud, const std::vect
   // Restarts: points near silhouettes switch sides and the alternation can settle in a nearby
   // local minimum along a weakly constrained direction. Start again from the result moved both
   // ways along each body's weakest directions; keep the lowest cost.
-  int restarts = 0;
+  int restarts = 0, returned = 0;
   for (int round = 0; round < options.restarts && best.IsUsable(); ++round) {
     bool improved = false;
     const RegistrationSummary current = best;
+    std::vector<Pose3> current_poses;
+    for (const auto& b : current.bodies) current_poses.push_back(b.T_base_body);
     for (std::size_t b = 0; b < bodies.size(); ++b) {
       if (!bodies[b].free) continue;
       double extent = 0.0;
@@ -181,8 +189,15 @@ RegistrationSummary Register(const std::vector<RayPoint>& cloud, const std::vect
           const double s = sign * options.restart_distance;
           T.linear() = ExpSO3(s * v.tail<3>() / extent) * T.linear();
           T.translation() += s * v.head<3>();
-          RegistrationSummary trial = internal::SolvePoseProblem(input, start, options).summary;
+          internal::PoseProblemInput trial_input = input;
+          trial_input.return_to = &current_poses;
+          internal::PoseProblemOutput trial_out = internal::SolvePoseProblem(trial_input, start, options);
           ++restarts;
+          if (trial_out.returned) {
+            ++returned;
+            continue;
+          }
+          RegistrationSummary trial = std::move(trial_out.summary);
           if (trial.IsUsable() && trial.cost < best.cost - 1e-9 * std::abs(best.cost)) {
             best = std::move(trial);
             improved = true;
@@ -192,7 +207,9 @@ RegistrationSummary Register(const std::vector<RayPoint>& cloud, const std::vect
     }
     if (!improved) break;
   }
-  if (restarts > 0) best.message += fmt::format(" (best of {} restarts)", restarts + 1);
+  if (restarts > 0)
+    best.message += fmt::format(" (best of {} restarts, {} of them back at the result they started from)", restarts + 1,
+                                returned);
   best.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   return best;
 }

@@ -61,6 +61,12 @@ enum class NoiseSource {
                ///< adaptive threshold does)
 };
 
+/// How each correspondence step's least-squares problem is solved.
+enum class LeastSquaresSolver {
+  kNormalEquations,  ///< LM on J^T J, J^T r accumulated point by point (few parameters, many residuals)
+  kCeres,            ///< a Ceres problem (dense Jacobian): the reference, same iteration
+};
+
 struct RegistrationOptions {
   LaserNoiseModel noise;                                       ///< point covariance (Sec. V-B)
   NoiseSource noise_source{NoiseSource::kModel};               ///< the scale of `noise`: given or estimated
@@ -76,7 +82,8 @@ struct RegistrationOptions {
   int coarse_stride{1};                ///< the first steps use every n-th matched point, until a
                                        ///< step moves less than 10x the tolerances; then all
                                        ///< (speed-up for far guesses; 1 = off, the paper)
-  int max_solver_iterations{25};       ///< Ceres iterations per step
+  int max_solver_iterations{25};       ///< LM iterations per step
+  LeastSquaresSolver solver{LeastSquaresSolver::kNormalEquations};  ///< how each step is solved
   Convergence convergence{Convergence::kPose};  ///< what the tolerances apply to
   double translation_tolerance{1e-5};  ///< [m] converged when no body moves more in a step
   double rotation_tolerance{5e-5};     ///< [rad] ... and none turns more
@@ -112,7 +119,7 @@ struct RegistrationOptions {
   double prior_sigma_rotation{1.0};    ///< [rad]
   double unconstrained_std{0.01};      ///< [m] a direction whose std (rotations times the body's
                                        ///< extent) exceeds this is reported unconstrained
-  int num_threads{1};                  ///< Ceres threads
+  int num_threads{1};                  ///< threads for matching and evaluation
 
   /// Reads a `registration:` section over `base`; every key optional, unknown keys rejected.
   static RegistrationOptions FromConfig(const ConfigNode& config, RegistrationOptions base);

@@ -9,6 +9,20 @@ namespace {
 
 Pose3 Inverse(const Pose3& p) { return p.inverse(Eigen::Isometry); }
 
+// FloorField's Height and Gradient at once (one sincos per wave: the floor's ray casting needs
+// both at every Newton step; the same sums as the two functions).
+double HeightAndGradient(const FloorField& floor, double x, double y, Eigen::Vector2d* gradient) {
+  double h = 0.0;
+  Eigen::Vector2d g = Eigen::Vector2d::Zero();
+  for (const FloorField::Wave& w : floor.waves) {
+    const double a = w.k.x() * x + w.k.y() * y + w.phase;
+    h += w.amplitude * std::sin(a);
+    g += w.amplitude * std::cos(a) * w.k;
+  }
+  *gradient = g;
+  return h;
+}
+
 }  // namespace
 
 double FloorField::Height(double x, double y) const {
@@ -118,8 +132,9 @@ std::optional<WorldHit> World::IntersectGround(const Eigen::Vector3d& o, const E
   // from the flat floor's hit converges in a few steps for any ray steeper than the slope.
   for (int it = 0; it < 8; ++it) {
     const Eigen::Vector3d p = o + t * d;
-    const double f = p.z() - FloorHeight(p.x(), p.y());
-    const double df = d.z() - floor_.Gradient(p.x(), p.y()).dot(d.head<2>());
+    Eigen::Vector2d grad;
+    const double f = p.z() - (site_.ground_z + HeightAndGradient(floor_, p.x(), p.y(), &grad));
+    const double df = d.z() - grad.dot(d.head<2>());
     if (df > -1e-9) return std::nullopt;  // grazing the field: treat as no floor hit
     const double dt = f / df;
     t -= dt;

@@ -102,6 +102,25 @@ TEST(CalibrationDerivatives, AutodiffAndAnalyticAgree) {
   EXPECT_TRUE(analytic.covariance.isApprox(autodiff.covariance, 1e-4));
 }
 
+// The normal-equation LM and the Ceres problem give the same mount, poses and covariance.
+TEST(CalibrationSolvers, NormalEquationsAndCeresAgree) {
+  const RobotModel robot = Robot();
+  const Pose3 T_true = robot.T_tool0_arm_laser * PoseFromXyzRpy(0.004, 0.0, -0.005, 0.01, 0.0, -0.01);
+  const auto sweeps = Sweeps(robot, T_true, true, 5, 12);
+  const auto bodies = CubeOnGroundBodies(0.25, kTrueCube * PoseFromXyzRpy(0.01, 0.0, 0.0, 0.0, 0.0, 0.02));
+  CalibrationOptions options;
+  const CalibrationSummary dense = CalibrateLaserMount(sweeps, bodies, robot.T_tool0_arm_laser, options);
+  options.registration.solver = LeastSquaresSolver::kCeres;
+  const CalibrationSummary ceres = CalibrateLaserMount(sweeps, bodies, robot.T_tool0_arm_laser, options);
+  ASSERT_TRUE(dense.IsUsable() && ceres.IsUsable()) << dense.BriefReport() << "\n" << ceres.BriefReport();
+  EXPECT_LT(TranslationDistance(dense.T_tool0_laser, ceres.T_tool0_laser), 1e-8);
+  EXPECT_LT(RotationAngle(dense.T_tool0_laser, ceres.T_tool0_laser), 1e-8);
+  EXPECT_TRUE(dense.covariance.isApprox(ceres.covariance, 1e-6));
+  ASSERT_EQ(dense.bodies.size(), ceres.bodies.size());
+  for (std::size_t k = 0; k < dense.bodies.size(); ++k)
+    EXPECT_LT(TranslationDistance(dense.bodies[k].T_base_body, ceres.bodies[k].T_base_body), 1e-8);
+}
+
 INSTANTIATE_TEST_SUITE_P(NoiseFreeAndNoisy, Calibration,
                          ::testing::Values(Case{false, 1e-4, 0.01 * kDeg}, Case{true, 0.003, 0.3 * kDeg}),
                          [](const auto& p) { return p.param.noisy ? "noisy" : "noise_free"; });

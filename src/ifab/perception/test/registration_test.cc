@@ -101,6 +101,50 @@ TEST(Registration, CoarseStepsEndAtTheSameMinimum) {
   EXPECT_NEAR(coarse.num_inliers, fine.num_inliers, 20);  // a few edge points may flip
 }
 
+// The normal-equation LM and the Ceres problem solve the same steps: same poses, covariances
+// (a-posteriori variance factor included) and cost, also with components held (SubsetManifold in
+// Ceres) and the noise scale estimated from the residuals. Each case would fail if the held
+// components moved, or if the variance factor or the held rows were left out of one path.
+TEST(Registration, NormalEquationsAndCeresGiveTheSameResult) {
+  const auto cloud = BrickCloud(2, /*mixed=*/true);
+  // (free, the model's noise) and (components held, the noise scale estimated and gated)
+  for (const bool hold : {false, true}) {
+    {
+      const NoiseSource source = hold ? NoiseSource::kEstimated : NoiseSource::kModel;
+      auto bodies = BrickOnGround(kGuessBrick);
+      if (hold) {  // the ground's height, roll and pitch held; the brick's z held
+        bodies[0].fixed = {false, false, true, true, true, false};
+        bodies[1].fixed[2] = true;
+      }
+      RegistrationOptions options;
+      options.noise_source = source;
+      options.gate_sigmas = source == NoiseSource::kEstimated ? 4.0 : 0.0;
+      const RegistrationSummary dense = Register(cloud, bodies, options);
+      options.solver = LeastSquaresSolver::kCeres;
+      const RegistrationSummary ceres = Register(cloud, bodies, options);
+      SCOPED_TRACE(::testing::Message() << "hold " << hold << ", estimated " << (source == NoiseSource::kEstimated));
+      ASSERT_EQ(dense.status, ceres.status) << dense.BriefReport() << "\n" << ceres.BriefReport();
+      EXPECT_EQ(dense.iterations, ceres.iterations);
+      EXPECT_EQ(dense.num_inliers, ceres.num_inliers);
+      EXPECT_NEAR(dense.cost, ceres.cost, 1e-8 * ceres.cost);
+      for (std::size_t k = 0; k < bodies.size(); ++k) {
+        const RegisteredBody& a = dense.bodies[k];
+        const RegisteredBody& b = ceres.bodies[k];
+        const PoseError e = Error(a.T_base_body, b.T_base_body);
+        EXPECT_LT(e.translation, 1e-8) << a.name;
+        EXPECT_LT(e.rotation, 1e-8) << a.name;
+        EXPECT_TRUE(a.covariance.isApprox(b.covariance, 1e-6)) << a.name << "\n" << a.covariance << "\n" << b.covariance;
+        EXPECT_EQ(a.unconstrained, b.unconstrained) << a.name;
+        if (hold) {  // held components stay at the guess, and carry no variance
+          EXPECT_EQ(a.T_base_body.translation().z(), bodies[k].T_base_body.translation().z()) << a.name;
+          EXPECT_EQ(a.covariance(2, 2), 0.0) << a.name;
+        }
+      }
+      EXPECT_GT(dense.bodies[1].covariance(0, 0), 0.0);
+    }
+  }
+}
+
 // Issue 14: NaN or infinite points (a broken file or driver) are left out, not summed into the
 // cost; before, one NaN point made the whole registration NaN.
 TEST(Registration, LeavesOutNonFinitePoints) {
