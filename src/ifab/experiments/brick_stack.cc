@@ -15,6 +15,7 @@
 #include "ifab/core/data_path.h"
 #include "ifab/experiments/experiments.h"
 #include "ifab/experiments/report_data.h"
+#include "ifab/experiments/sim_forwarding_robot.h"
 #include "ifab/perception/cloud.h"
 #include "ifab/perception/ply.h"
 #include "ifab/sequencer/laser_sweeps.h"
@@ -32,10 +33,9 @@ std::string Beside(const ConfigNode& c, const std::string& key) {
 }
 
 // Forwards to the simulator and samples the true base pose as time passes (for Fig. 6).
-class RecordingRobot final : public hal::Robot {
+class RecordingRobot final : public SimForwardingRobot {
  public:
-  explicit RecordingRobot(sim::SimRobot& sim) : sim_(sim) {}
-  Seconds Now() const override { return sim_.Now(); }
+  explicit RecordingRobot(sim::SimRobot& sim) : SimForwardingRobot(sim) {}
   void Wait(Seconds dt) override {
     sim_.Wait(dt);
     if (replay)
@@ -46,21 +46,10 @@ class RecordingRobot final : public hal::Robot {
       next_ = sim_.Now() + truth_period;
     }
   }
-  void CommandTracks(const TrackCommand& c) override { sim_.CommandTracks(c); }
-  void SendJointTrajectory(const JointTrajectory& t) override { sim_.SendJointTrajectory(t); }
-  bool ArmBusy() const override { return sim_.ArmBusy(); }
-  std::string ArmRejection() const override { return sim_.ArmRejection(); }
-  std::optional<bool> VacuumHolding() const override { return sim_.VacuumHolding(); }
-  void SetGripper(bool grip) override { sim_.SetGripper(grip); }
   void SetLaserActive(DeviceId id, bool active) override {
     if (replay && id == DeviceId::kArmLaser) replay->ArmLaser(sim_.Now(), active);
     sim_.SetLaserActive(id, active);
   }
-  std::vector<LaserScan> TakeLaserScans(DeviceId id) override { return sim_.TakeLaserScans(id); }
-  std::vector<GyroSample> TakeGyroSamples() override { return sim_.TakeGyroSamples(); }
-  std::vector<AccelSample> TakeAccelSamples() override { return sim_.TakeAccelSamples(); }
-  std::vector<JointState> TakeJointStates() override { return sim_.TakeJointStates(); }
-  std::vector<SyncPulse> TakeSyncPulses() override { return sim_.TakeSyncPulses(); }
 
   std::vector<Stamped<Pose2>> truth;
   /// The sampled true base poses as CSV (t, x, y, theta; SI units), to redraw Fig. 6.
@@ -74,7 +63,6 @@ class RecordingRobot final : public hal::Robot {
   ReplayRecorder* replay{nullptr};  ///< samples for the report's 3D replay (optional)
 
  private:
-  sim::SimRobot& sim_;
   Seconds next_{0.0};
 };
 

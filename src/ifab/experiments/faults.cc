@@ -15,6 +15,7 @@
 #include "ifab/experiments/atomic_file.h"
 #include "ifab/experiments/brick_stack_setup.h"
 #include "ifab/experiments/experiments.h"
+#include "ifab/experiments/sim_forwarding_robot.h"
 #include "ifab/sim/faults.h"
 
 namespace ifab::experiments {
@@ -23,26 +24,14 @@ namespace fs = std::filesystem;
 
 // The simulated robot behind hal::Robot, watching (truth, for scoring) whether the base ever
 // touches a person the faults put in its way.
-class WatchedRobot final : public hal::Robot {
+class WatchedRobot final : public SimForwardingRobot {
  public:
-  explicit WatchedRobot(sim::SimRobot& sim, double length, double width) : sim_(sim), length_(length), width_(width) {}
-  Seconds Now() const override { return sim_.Now(); }
+  explicit WatchedRobot(sim::SimRobot& sim, double length, double width)
+      : SimForwardingRobot(sim), length_(length), width_(width) {}
   void Wait(Seconds dt) override {
     sim_.Wait(dt);
     CheckContact();
   }
-  void CommandTracks(const TrackCommand& c) override { sim_.CommandTracks(c); }
-  void SendJointTrajectory(const JointTrajectory& t) override { sim_.SendJointTrajectory(t); }
-  bool ArmBusy() const override { return sim_.ArmBusy(); }
-  std::string ArmRejection() const override { return sim_.ArmRejection(); }
-  std::optional<bool> VacuumHolding() const override { return sim_.VacuumHolding(); }
-  void SetGripper(bool grip) override { sim_.SetGripper(grip); }
-  void SetLaserActive(DeviceId id, bool active) override { sim_.SetLaserActive(id, active); }
-  std::vector<LaserScan> TakeLaserScans(DeviceId id) override { return sim_.TakeLaserScans(id); }
-  std::vector<GyroSample> TakeGyroSamples() override { return sim_.TakeGyroSamples(); }
-  std::vector<AccelSample> TakeAccelSamples() override { return sim_.TakeAccelSamples(); }  // tilt compensation
-  std::vector<JointState> TakeJointStates() override { return sim_.TakeJointStates(); }
-  std::vector<SyncPulse> TakeSyncPulses() override { return sim_.TakeSyncPulses(); }
 
   int contacts{0};            ///< control periods in which the footprint overlapped a person
   double closest_person{1e9}; ///< [m] closest approach of the footprint to a person
@@ -60,7 +49,6 @@ class WatchedRobot final : public hal::Robot {
       if (gap <= 0.0) ++contacts;
     }
   }
-  sim::SimRobot& sim_;
   double length_, width_;
 };
 
@@ -80,7 +68,8 @@ Response ResponseTo(sim::FaultKind k, DeviceId device) {
     case K::kTrackStall: return {{"replan"}, 120.0};
     case K::kGyroSpikes: return {{"gyro_spikes"}, 5.0};
     case K::kGyroBiasStep: return {{}, 0.0};
-    case K::kClockJump: return {{"clock_sync_reset"}, 60.0};
+    case K::kClockJump:  // the arm laser sends only in sweeps: its jump shows at the next one
+      return {{"clock_sync_reset"}, device == DeviceId::kArmLaser ? 300.0 : 60.0};
     case K::kArmTrajectoryRejected: return {{"arm_rejected"}, 5.0};
     case K::kBrickDropped: return {{"brick_lost"}, 60.0};
     case K::kStackBumped: return {{}, 0.0};

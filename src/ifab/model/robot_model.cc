@@ -165,10 +165,36 @@ RobotModel ParseRobotModel(const std::string& urdf_text, const std::string& urdf
     }
   }
 
+  // Joints that form a loop make urdfdom's links own each other (child_links are shared
+  // pointers): the model would leak (found by the fuzzer). Break every link's ownership of its
+  // children when done, however this function ends, and reject the loop.
+  struct BreakCycles {
+    urdf::ModelInterface& m;
+    ~BreakCycles() {
+      for (auto& [name, link] : m.links_) {
+        link->child_links.clear();
+        link->child_joints.clear();
+      }
+    }
+  } break_cycles{*urdf_model};
+
   RobotModel model;
   model.urdf_path = urdf_path;
   const auto root = urdf_model->getRoot();
   if (!root) ThrowInputError("{}: the URDF has no root link", urdf_path);
+  {
+    std::size_t reached = 0;
+    std::vector<urdf::LinkConstSharedPtr> todo{root};
+    while (!todo.empty() && reached <= urdf_model->links_.size()) {
+      const urdf::LinkConstSharedPtr l = todo.back();
+      todo.pop_back();
+      ++reached;
+      todo.insert(todo.end(), l->child_links.begin(), l->child_links.end());
+    }
+    if (reached != urdf_model->links_.size())
+      ThrowInputError("{}: the joints form a loop: {} links, {} reached from the root link '{}' by its joints",
+                      urdf_path, urdf_model->links_.size(), reached, root->name);
+  }
   CheckPhysical(*urdf_model, urdf_path);
   model.tree = KDL::Tree(root->name);
   AddChildren(root, model.tree);

@@ -92,6 +92,10 @@ Mission::Mission(hal::Robot& robot, MissionComponents components, MissionOptions
       sync_arm_laser_(c_.clock_sync),
       sync_gyro_(c_.clock_sync),
       sync_arm_(c_.clock_sync),
+      step_base_laser_(o_.max_stamp_lag),
+      step_arm_laser_(o_.max_stamp_lag),
+      step_gyro_(o_.max_stamp_lag),
+      step_arm_(o_.max_stamp_lag),
       workpiece_(c_.site) {
   const Pose3& T = c_.robot.T_base_base_laser;
   estimator_ = std::make_unique<base::BaseStateEstimator>(c_.estimator, Pose2Of(T));
@@ -162,28 +166,42 @@ void Mission::PumpSensors() {
       last_scan_points_.emplace_back(p.x(), p.y());
     }
   }
-  // A device whose synced stamps land far from their arrival time has a broken clock mapping
-  // (e.g. its clock jumped): forget its sync and learn it again from the next pulses.
-  auto check_clock = [&](DeviceClockSync& sync, auto& packets, const char* name) {
+  // A device whose synced stamps land far from their arrival time has a broken clock mapping,
+  // and one whose raw stamps step against their arrival had its clock jump (seen even when the
+  // sync has restarted on the new pairs meanwhile): forget its sync, learn it from the next pulses.
+  auto check_clock = [&](DeviceClockSync& sync, ClockStepDetector& steps, auto& packets, const char* name) {
     int off = 0;
+    Seconds step = 0.0;
+    // The skew as the sync fitted it; its line is pinned to within max_early at both ends of the
+    // window, so the slope to about 2 max_early / window. Before any fit: the largest skew trusted.
+    const std::optional<ClockMapping> m = sync.clock().Mapping();
+    const double skew = m ? m->Skew() : 0.0;
+    const double skew_unc = m && c_.clock_sync.max_early > 0
+                                ? 2.0 * c_.clock_sync.max_early / c_.clock_sync.window
+                                : c_.clock_sync.max_abs_skew;
     for (const auto& p : packets) {
       Stamp st = p.stamp;
       if (sync.Apply(st) && std::abs(st.t - st.t_host_received) > o_.max_stamp_lag) ++off;
+      if (const Seconds s = steps.Add(p.stamp, skew, skew_unc); s != 0.0) step = s;
     }
-    if (off == 0) return;
+    if (off == 0 && step == 0.0) return;
     sync = DeviceClockSync(c_.clock_sync);
     packets.clear();
-    Note("clock_sync_reset", fmt::format("{} packets of the {} synced more than {:.2f} s from their arrival; "
-                                         "re-syncing its clock", off, name, o_.max_stamp_lag));
+    if (step != 0.0)
+      Note("clock_sync_reset", fmt::format("the {}'s clock stepped by {:+.2f} s against its packets' arrival; "
+                                           "re-syncing it", name, step));
+    else
+      Note("clock_sync_reset", fmt::format("{} packets of the {} synced more than {:.2f} s from their arrival; "
+                                           "re-syncing its clock", off, name, o_.max_stamp_lag));
   };
   for (const auto& g : gyro_in) sync_gyro_.AddPacket(g.stamp);
   for (const auto& s : base_in) sync_base_laser_.AddPacket(s.stamp);
   for (const auto& s : arm_in) sync_arm_laser_.AddPacket(s.stamp);
   for (const auto& j : joints_in) sync_arm_.AddPacket(j.stamp);
-  check_clock(sync_gyro_, gyro_in, "gyro");
-  check_clock(sync_base_laser_, base_in, "base laser");
-  check_clock(sync_arm_laser_, arm_in, "arm laser");
-  check_clock(sync_arm_, joints_in, "arm");
+  check_clock(sync_gyro_, step_gyro_, gyro_in, "gyro");
+  check_clock(sync_base_laser_, step_base_laser_, base_in, "base laser");
+  check_clock(sync_arm_laser_, step_arm_laser_, arm_in, "arm laser");
+  check_clock(sync_arm_, step_arm_, joints_in, "arm");
   auto synced = [](const DeviceClockSync& sync, Stamp& stamp, Seconds& last) {
     if (!sync.Apply(stamp) || stamp.t <= last) return false;
     last = stamp.t;

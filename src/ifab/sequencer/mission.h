@@ -189,6 +189,7 @@ class Mission {
   std::unique_ptr<base::BaseStateEstimator> estimator_;
   std::unique_ptr<arm::ArmPrimitives> arm_;
   DeviceClockSync sync_base_laser_, sync_arm_laser_, sync_gyro_, sync_arm_;
+  ClockStepDetector step_base_laser_, step_arm_laser_, step_gyro_, step_arm_;  // clock jumps, from raw stamps
   Seconds last_scan_mid_{0.0};  ///< mid time of the last base scan given to the estimator
   Seconds last_gyro_{-1e300}, last_base_scan_{-1e300}, last_arm_scan_{-1e300}, last_joint_state_{-1e300};
   std::vector<LaserScan> arm_scans_;

@@ -241,4 +241,23 @@ bool DeviceClockSync::Apply(Stamp& stamp) const {
   return true;
 }
 
+Seconds ClockStepDetector::Add(const Stamp& stamp, double skew, double skew_uncertainty) {
+  // t_host = a + (1 + skew) t_device + delay, so the offset moves by skew per device second.
+  const Seconds d = stamp.t_host_received - stamp.t_device;
+  const Seconds predicted = offset_ + skew * (stamp.t_device - device_);
+  const Seconds tolerance = max_lag_ + skew_uncertainty * std::abs(stamp.t_host_received - arrival_);
+  if (seen_ && std::abs(d - predicted) > tolerance) {
+    if (++stepped_ < 2) return 0.0;
+    seen_ = false;
+    stepped_ = 0;
+    return predicted - d;  // the device clock moved forward by this much
+  }
+  offset_ = d;
+  device_ = stamp.t_device;
+  arrival_ = stamp.t_host_received;
+  seen_ = true;
+  stepped_ = 0;
+  return 0.0;
+}
+
 }  // namespace ifab

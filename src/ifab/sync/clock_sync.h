@@ -133,4 +133,25 @@ class DeviceClockSync {
   std::map<std::uint64_t, Seconds> pulses_;   // host time by sequence, waiting for its packet
 };
 
+/// Sees a device's clock jump from its raw stamps: (arrival - device stamp) steps by more than
+/// transport lag and the clock's skew explain. It needs no sync pulses, so it sees a jump at the
+/// first packets after it, even on a device that was silent for minutes (the arm laser between
+/// sweeps), whatever the sync has learnt meanwhile.
+class ClockStepDetector {
+ public:
+  /// max_lag: [s] how late a packet may arrive.
+  explicit ClockStepDetector(double max_lag) : max_lag_(max_lag) {}
+  /// One packet, in arrival order, with the device's skew as known (e.g. fitted by its sync) and
+  /// how far that may be off (the offset drifts by skew x silence). Returns the step [s] of the
+  /// device clock once two packets in a row are off (one alone is a late packet), else 0. After a
+  /// step the new offset is learnt afresh.
+  Seconds Add(const Stamp& stamp, double skew, double skew_uncertainty);
+
+ private:
+  double max_lag_;
+  Seconds offset_{0.0}, device_{0.0}, arrival_{0.0};  // of the newest packet that agreed with its predecessor
+  bool seen_{false};
+  int stepped_{0};
+};
+
 }  // namespace ifab

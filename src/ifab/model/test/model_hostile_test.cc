@@ -37,6 +37,14 @@ TEST(UrdfHostile, TheRobotLoadsFromText) {
   EXPECT_EQ(ParseRobotModel(Urdf(), "robot.urdf").joint_names.size(), 6u);
 }
 
+TEST(UrdfHostile, RejectsJointsThatFormALoop) {
+  // Found by the fuzzer: urdfdom accepts a loop (its links then own each other and leak under
+  // ASan); before, the loader failed later for a missing chain.
+  EXPECT_THAT(UrdfError("<joint name=\"joint_4\" type=\"revolute\">\n    <parent link=\"link_3\"/>",
+                        "<joint name=\"joint_4\" type=\"revolute\">\n    <parent link=\"link_6\"/>"),
+              HasSubstr("hostile.urdf: the joints form a loop"));
+}
+
 TEST(UrdfHostile, RejectsNonFiniteMasses) {
   // urdfdom reads these without complaint, as a mass of 0.
   EXPECT_THAT(UrdfError("<mass value=\"965\"/>", "<mass value=\"nan\"/>"),

@@ -206,5 +206,44 @@ TEST(ClockSyncOptions, ReadsAndValidatesConfig) {
   EXPECT_THROW(ClockSyncOptions::FromConfig(ConfigNode::FromString("{windw: 1}")), InputError);
 }
 
+// Packets of a device with 50 ppm skew, a 4 ms mean transport delay, sent at 40 Hz in bursts
+// (a sweep of 5 s), silent for `silence` s between bursts; its clock jumps by `jump` s just
+// before burst `jump_burst`. Returns the step reported, and at which packet of that burst.
+struct StepSeen {
+  Seconds step{0.0};
+  int burst{-1}, packet{-1};
+};
+StepSeen RunBursts(double silence, double jump, int jump_burst, int late_packet = -1) {
+  ClockStepDetector d(0.25);
+  RandomStream rng(5);
+  Seconds t = 100.0, jumped = 0.0;
+  for (int b = 0; b < 4; ++b) {
+    if (b == jump_burst) jumped = jump;
+    for (int k = 0; k < 200; ++k, t += 0.025) {
+      Stamp s;
+      s.t_device = 1e6 + (1 + 50e-6) * t + jumped;
+      s.t_host_received = t + 0.001 + -0.004 * std::log(1.0 - rng.Uniform());
+      if (b == 1 && k == late_packet) s.t_host_received += 0.4;  // one packet stuck in a buffer
+      if (const Seconds step = d.Add(s, -50e-6, 2 * 0.002 / 60); step != 0.0) return {step, b, k};
+    }
+    t += silence;
+  }
+  return {};
+}
+
+TEST(ClockStepDetector, SeesAJumpOnADeviceSilentForMinutesAtItsSecondPacket) {
+  for (const double jump : {0.5, -0.5, 2.0}) {
+    const StepSeen s = RunBursts(300.0, jump, 2);
+    EXPECT_EQ(s.burst, 2) << jump;
+    EXPECT_EQ(s.packet, 1) << jump;
+    EXPECT_NEAR(s.step, jump, 0.02) << jump;
+  }
+}
+
+TEST(ClockStepDetector, IgnoresSkewOverSilenceAndALatePacket) {
+  EXPECT_EQ(RunBursts(300.0, 0.0, -1).burst, -1);       // 50 ppm over 5 min: 15 ms of drift
+  EXPECT_EQ(RunBursts(1.0, 0.0, -1, 17).burst, -1);     // one packet 0.4 s late
+}
+
 }  // namespace
 }  // namespace ifab
