@@ -247,7 +247,7 @@ double StompBasePlanner::EstimateDuration(const Pose2& start, const Pose2& goal)
 }
 
 bool StompBasePlanner::ProvablyClear(const Pose2& p, double c, double s, double margin) const {
-  if (grid_clearance_.empty()) return false;
+  if (grid_clearance_.empty()) return false;  // built with the reachability grid only
   // PointClearance is 1-Lipschitz, so a point within half a cell diagonal of a node is at least
   // the node's value minus that far from every object; a disc around it, its radius less.
   const double cell = options_.reachability_cell;
