@@ -392,6 +392,7 @@ void DynamicsRows(int samples) {
 int main(int argc, char** argv) {
   int sweeps = 24, samples = 20000;
   double time_limit = 1.0;
+  std::string only;  // empty: all three parts
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto value = [&](const char* name) {
@@ -405,8 +406,16 @@ int main(int argc, char** argv) {
       if (a == "--sweeps") sweeps = std::stoi(value("--sweeps"));
       else if (a == "--ompl-time-limit") time_limit = std::stod(value("--ompl-time-limit"));
       else if (a == "--dynamics-samples") samples = std::stoi(value("--dynamics-samples"));
+      else if (a == "--only") {
+        only = value("--only");
+        if (only != "registration" && only != "planning" && only != "dynamics") {
+          std::fprintf(stderr, "peers: --only: expected registration, planning or dynamics, got '%s'\n", only.c_str());
+          return 2;
+        }
+      }
       else if (a == "-h" || a == "--help") {
         std::puts("peers [--sweeps N (24)] [--ompl-time-limit S (1.0)] [--dynamics-samples N (20000)]\n"
+                  "      [--only registration|planning|dynamics]\n"
                   "ifab beside Open3D (registration), OMPL (base planning) and KDL (dynamics) on the same inputs.");
         return 0;
       } else {
@@ -424,12 +433,18 @@ int main(int argc, char** argv) {
   }
   setenv("OMP_NUM_THREADS", "1", 1);
   using namespace ifab;
-  std::fprintf(stderr, "peers: registration of %d sweeps...\n", sweeps);
-  RegistrationRows(sweeps);
-  std::fprintf(stderr, "peers: base planning...\n");
-  PlanningRows(time_limit);
-  std::fprintf(stderr, "peers: dynamics...\n");
-  DynamicsRows(samples);
+  if (only.empty() || only == "registration") {
+    std::fprintf(stderr, "peers: registration of %d sweeps...\n", sweeps);
+    RegistrationRows(sweeps);
+  }
+  if (only.empty() || only == "planning") {
+    std::fprintf(stderr, "peers: base planning...\n");
+    PlanningRows(time_limit);
+  }
+  if (only.empty() || only == "dynamics") {
+    std::fprintf(stderr, "peers: dynamics...\n");
+    DynamicsRows(samples);
+  }
   std::puts("| work | figure | ifab | peer | peer figure | ifab / peer |");
   std::puts("|---|---|---|---|---|---|");
   for (const auto& r : rows)

@@ -231,7 +231,9 @@ double FootprintChecker::BoundaryClearance(const Box& box, double cull) const {
   const double r = robot_.CircumRadius();
   double d = kInf;
   for (const Convex& e : edges_) {
-    if ((box.centre - e.centre).norm() - e.radius - r >= cull) continue;
+    // The footprint lies within r of its centre, so the centre's distance to the edge less r is a
+    // lower bound (much tighter than the bounding circle of a long edge).
+    if (PointSegmentDistance(box.centre, e.vertices[0], e.vertices[1]) - r >= cull) continue;
     d = std::min(d, BoxDistance(box, e, cull));
   }
   if (d > 0.0 && !PointInPolygon(scene_.boundary, box.centre)) {
@@ -266,7 +268,14 @@ double FootprintChecker::Clearance(const Pose2& T_site_base, std::string* closes
 }
 
 double FootprintChecker::Cost(const Pose2& T_site_base, double margin, double collision_penalty) const {
-  const Box box = MakeBox(T_site_base);
+  return Cost(T_site_base, std::cos(T_site_base.theta), std::sin(T_site_base.theta), margin, collision_penalty);
+}
+
+double FootprintChecker::Cost(const Pose2& T_site_base, double c, double s, double margin,
+                              double collision_penalty) const {
+  const Eigen::Vector2d& off = robot_.footprint_offset;
+  const Box box{Eigen::Vector2d(T_site_base.x + c * off.x() - s * off.y(), T_site_base.y + s * off.x() + c * off.y()),
+                c, s};
   const double r = robot_.CircumRadius();
   double cost = 0.0;
   const auto add = [&](double d) {

@@ -70,6 +70,9 @@ class FootprintChecker {
   /// max(0, margin - d) plus collision_penalty if d < 0. Objects farther than margin cost
   /// nothing and are culled by bounding circles.
   double Cost(const Pose2& T_site_base, double margin, double collision_penalty) const;
+  /// The same, with cos and sin of T_site_base.theta already at hand.
+  double Cost(const Pose2& T_site_base, double cos_theta, double sin_theta, double margin,
+              double collision_penalty) const;
 
   /// True if the centre of the footprint is inside the boundary (or there is no boundary).
   bool CentreInsideBoundary(const Pose2& T_site_base) const;

@@ -186,10 +186,25 @@ StompBasePlanner::StompBasePlanner(PlanningScene scene, BaseGeometry robot, Stom
     const double r_in = 0.5 * std::min(checker_.robot().length, checker_.robot().width);
     const double slack = 0.5 * std::sqrt(2.0) * cell;
     std::vector<char> open(static_cast<std::size_t>(grid_nx_ * grid_ny_));
+    grid_clearance_.assign(open.size(), 0.0);
+    // Discs covering the footprint: m equal pieces along its longer side, each in a disc through
+    // its corners. Three for the 1.8 x 1.2 m base (radius 0.67 m against the 1.08 m circumcircle),
+    // so that far more poses are shown clear of everything by the field alone.
+    const BaseGeometry& g = checker_.robot();
+    const bool along_x = g.length >= g.width;
+    const double lng = along_x ? g.length : g.width, shrt = along_x ? g.width : g.length;
+    const int m = std::max(1, static_cast<int>(std::lround(2.0 * lng / shrt)));
+    cover_radius_ = 0.5 * std::hypot(lng / m, shrt);
+    for (int j = 0; j < m; ++j) {
+      const double u = -0.5 * lng + (j + 0.5) * lng / m;
+      cover_centres_.push_back(g.footprint_offset + (along_x ? Eigen::Vector2d(u, 0.0) : Eigen::Vector2d(0.0, u)));
+    }
     for (int iy = 0; iy < grid_ny_; ++iy) {
       for (int ix = 0; ix < grid_nx_; ++ix) {
         const Eigen::Vector2d p = lo + cell * Eigen::Vector2d(ix, iy);
-        open[iy * grid_nx_ + ix] = checker_.PointClearance(p) >= r_in - slack;
+        const double d = checker_.PointClearance(p);
+        grid_clearance_[iy * grid_nx_ + ix] = d;
+        open[iy * grid_nx_ + ix] = d >= r_in - slack;
       }
     }
     grid_label_.assign(open.size(), -1);
@@ -231,6 +246,29 @@ double StompBasePlanner::EstimateDuration(const Pose2& start, const Pose2& goal)
   return std::max(options_.duration_slack * t, 1.0);
 }
 
+bool StompBasePlanner::ProvablyClear(const Pose2& p, double c, double s, double margin) const {
+  if (grid_clearance_.empty()) return false;  // built with the reachability grid only
+  // PointClearance is 1-Lipschitz, so a point within half a cell diagonal of a node is at least
+  // the node's value minus that far from every object; a disc around it, its radius less.
+  const double cell = options_.reachability_cell;
+  const double need = margin + cover_radius_ + 0.5 * std::sqrt(2.0) * cell + 1e-9;
+  const double inv_cell = 1.0 / cell;
+  for (const Eigen::Vector2d& o : cover_centres_) {
+    const double gx = (p.x + c * o.x() - s * o.y() - grid_origin_.x()) * inv_cell + 0.5;
+    const double gy = (p.y + s * o.x() + c * o.y() - grid_origin_.y()) * inv_cell + 0.5;
+    if (!(gx >= 0.0 && gy >= 0.0 && gx < grid_nx_ && gy < grid_ny_)) return false;
+    const int ix = static_cast<int>(gx), iy = static_cast<int>(gy);  // nearest node (gx, gy >= 0)
+    if (grid_clearance_[iy * grid_nx_ + ix] < need) return false;
+  }
+  return true;
+}
+
+double StompBasePlanner::ObstacleCost(const Pose2& p, double margin, double collision_penalty) const {
+  const double c = std::cos(p.theta), s = std::sin(p.theta);
+  if (ProvablyClear(p, c, s, margin)) return 0.0;
+  return checker_.Cost(p, c, s, margin, collision_penalty);
+}
+
 void StompBasePlanner::PointCosts(const TrajectoryMatrix& q, Eigen::VectorXd* per_point) const {
   per_point->setZero(q.rows());
   AddSmoothnessCosts(q, options_.smoothness, per_point);
@@ -239,7 +277,7 @@ void StompBasePlanner::PointCosts(const TrajectoryMatrix& q, Eigen::VectorXd* pe
   const Eigen::Index last = q.rows() - 1;
   for (Eigen::Index i = 0; i <= last; ++i) {
     const auto cost_at = [&](const Eigen::Vector3d& p) {
-      return checker_.Cost(Pose2(p.x(), p.y(), p.z()), options_.obstacle_margin, options_.collision_penalty);
+      return ObstacleCost(Pose2(p.x(), p.y(), p.z()), options_.obstacle_margin, options_.collision_penalty);
     };
     const Eigen::Vector3d a = q.row(i).transpose();
     double c = cost_at(a);
@@ -285,7 +323,7 @@ double StompBasePlanner::DenseClearance(const TrajectoryMatrix& q) const {
 bool StompBasePlanner::DenseCollisionFree(const TrajectoryMatrix& q, double clearance) const {
   const double margin = clearance + 1e-9;
   return ForEachDensePose(q, options_.collision_check_step, checker_.robot().CircumRadius(),
-                          [&](const Pose2& p) { return checker_.Cost(p, margin, 0.0) <= 0.0; });
+                          [&](const Pose2& p) { return ObstacleCost(p, margin, 0.0) <= 0.0; });
 }
 
 bool StompBasePlanner::IsReachable(const Pose2& start, const Pose2& goal) const {

@@ -174,6 +174,11 @@ class StompBasePlanner {
   bool ProjectOntoConstraints(TrajectoryMatrix* q, Workspace* ws, int steps, double target) const;
   BaseTrajectory ToBaseTrajectory(const TrajectoryMatrix& q, double duration, double* max_lateral,
                                   double* max_track) const;
+  // True if the footprint at p is provably at least `margin` from the boundary's edges (inside it)
+  // and from every obstacle, from the point clearance field alone; false if that cannot be shown.
+  bool ProvablyClear(const Pose2& p, double c, double s, double margin) const;
+  // checker_.Cost, skipped (it is exactly zero) where ProvablyClear holds.
+  double ObstacleCost(const Pose2& p, double margin, double collision_penalty) const;
 
   StompPlannerOptions options_;
   FootprintChecker checker_;
@@ -185,6 +190,12 @@ class StompBasePlanner {
   Eigen::Vector2d grid_origin_{0, 0};
   int grid_nx_{0}, grid_ny_{0};
   std::vector<int> grid_label_;  // connected component per cell, -1 = blocked
+  // Signed point clearance (FootprintChecker::PointClearance) at each grid node, and the discs
+  // that cover the footprint (centres in the base frame, common radius): a cheap lower bound on
+  // the footprint's clearance that lets most obstacle costs be skipped.
+  std::vector<double> grid_clearance_;
+  std::vector<Eigen::Vector2d> cover_centres_;
+  double cover_radius_{0.0};
 };
 
 }  // namespace ifab::base

@@ -102,6 +102,41 @@ TEST(FootprintChecker, ClearanceMatchesGenericConvexDistance) {
   }
 }
 
+// Cost is culled (bounding circles, boundary edges by the centre's distance): it must equal the
+// hinge computed from every object's exact distance.
+TEST(FootprintChecker, CostMatchesTheHingeOverEveryObject) {
+  const PlanningScene scene = testing::BrickStackingScene();
+  const BaseGeometry robot = testing::InsituFabricatorBase();
+  const FootprintChecker checker(scene, robot);
+  const double margin = 0.15, penalty = 1.0;
+  RandomStream rng(11);
+  int costly = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const Pose2 pose(rng.Uniform(-4, 4), rng.Uniform(-3, 3), rng.Uniform(-kPi, kPi));
+    const auto corners = robot.Corners(pose);
+    const std::vector<Eigen::Vector2d> box(corners.begin(), corners.end());
+    const auto hinge = [&](double d) { return std::max(0.0, margin - d) + (d < 0.0 ? penalty : 0.0); };
+    double expected = 0.0;
+    for (const auto& o : scene.obstacles) expected += hinge(Distance(box, o));
+    const auto& b = scene.boundary;
+    double d_boundary = std::numeric_limits<double>::infinity();
+    for (std::size_t e = 0; e < b.size(); ++e) {
+      d_boundary = std::min(d_boundary, Distance(box, {b[e], b[(e + 1) % b.size()]}));
+    }
+    const bool all_outside = d_boundary > 0.0 && !PointInPolygon(b, pose * robot.footprint_offset);
+    if (!all_outside) expected += hinge(d_boundary);
+    const double cost = checker.Cost(pose, margin, penalty);
+    if (!all_outside) {
+      ASSERT_NEAR(cost, expected, 1e-9) << "pose " << pose;
+    } else {
+      ASSERT_GT(cost, expected - 1e-9) << "pose " << pose;  // outside: penalised, by how far out
+    }
+    ASSERT_EQ(checker.Cost(pose, std::cos(pose.theta), std::sin(pose.theta), margin, penalty), cost);
+    costly += cost > 0.0;
+  }
+  EXPECT_GT(costly, 200);  // the samples do come near the objects
+}
+
 TEST(FootprintChecker, BoundaryInsideCrossingOutside) {
   PlanningScene scene;
   scene.boundary = Rectangle(0, 0, 10, 10);

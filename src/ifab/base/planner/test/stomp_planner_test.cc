@@ -9,6 +9,7 @@
 #include "ifab/core/angles.h"
 #include "ifab/core/data_path.h"
 #include "ifab/core/error.h"
+#include "ifab/core/random.h"
 
 namespace ifab::base {
 namespace {
@@ -107,6 +108,37 @@ TEST(StompPlannerOptions, ShippedYamlHoldsTheDefaults) {
     EXPECT_EQ(p.cost_window, q.cost_window);
     EXPECT_EQ(p.convergence_tolerance, q.convergence_tolerance);
   }
+}
+
+// The point-clearance field only skips poses whose obstacle cost is zero: per-point costs are the
+// same as without it (check_reachability off builds no field).
+TEST(StompBasePlanner, ClearanceFieldLeavesPointCostsUnchanged) {
+  const StompBasePlanner with = MakePlanner();
+  StompPlannerOptions o;
+  o.check_reachability = false;
+  const StompBasePlanner without = MakePlanner(o);
+  RandomStream rng(5);
+  const int rows = o.num_time_steps + 2;
+  int zero_points = 0, costly_points = 0;
+  for (int t = 0; t < 200; ++t) {
+    TrajectoryMatrix q(rows, 3);
+    const Eigen::Vector3d a(rng.Uniform(-4, 4), rng.Uniform(-3, 3), rng.Uniform(-kPi, kPi));
+    const Eigen::Vector3d b(rng.Uniform(-4, 4), rng.Uniform(-3, 3), rng.Uniform(-kPi, kPi));
+    for (int i = 0; i < rows; ++i) {
+      const double f = static_cast<double>(i) / (rows - 1);
+      q.row(i) = (a + f * (b - a)).transpose() + 0.05 * Eigen::RowVector3d(rng.Normal(), rng.Normal(), rng.Normal());
+    }
+    Eigen::VectorXd c1, c2, smooth = Eigen::VectorXd::Zero(rows);
+    with.PointCosts(q, &c1);
+    without.PointCosts(q, &c2);
+    ASSERT_EQ(c1.size(), c2.size());
+    for (int i = 0; i < rows; ++i) ASSERT_DOUBLE_EQ(c1[i], c2[i]) << "trajectory " << t << " point " << i;
+    AddSmoothnessCosts(q, o.smoothness, &smooth);
+    for (int i = 0; i < rows; ++i) (c1[i] - smooth[i] > 1e-9 ? costly_points : zero_points)++;
+    ASSERT_EQ(with.DenseCollisionFree(q, 0.05), without.DenseCollisionFree(q, 0.05)) << "trajectory " << t;
+  }
+  EXPECT_GT(zero_points, 500);    // poses clear of everything, where the field skips the checker
+  EXPECT_GT(costly_points, 500);  // and poses near the objects
 }
 
 TEST(StompBasePlanner, EstimatesDurationFromDistanceTurnAndTrackSpeed) {
