@@ -571,6 +571,10 @@ struct BaseStateEstimator::Impl {
         ArcLengthWeights(level.cloud.points, ReferenceSpacing(l), max_gap, &level.weight);
         if (o.residual == MatchResidual::kPointToLine) {
           ComputeNormals(&level, std::max(3.0 * ReferenceSpacing(l), 2.0 * LevelSigma(l)));
+        } else if (o.structure_degeneracy_ratio > 0.0) {
+          ComputeNormals(&level, o.structure_normal_radius);
+        } else {
+          level.normals.clear();
         }
       }
       level.tree->buildIndex();
@@ -758,6 +762,8 @@ struct BaseStateEstimator::Impl {
           if (line) {
             pr.n_world = f.R_world_kf * f.level->normals[j];
             if (pr.n_world.squaredNorm() == 0.0) continue;  // no line here
+          } else if (j < f.level->normals.size()) {
+            pr.n_world = f.R_world_kf * f.level->normals[j];  // for StructureInformation only
           } else {
             pr.n_world.setZero();
           }
@@ -797,6 +803,34 @@ struct BaseStateEstimator::Impl {
       ne.rows += end - begin;
     }
     return ne;
+  }
+
+  // The scene's structure as point-to-line information (Zhang, Kaess, Singh 2016): each matched
+  // point constrains the pose along the local normal of its nearest reference point only. Unlike
+  // the kernel sum's Hessian it has no curvature along a wall, however its points are spaced.
+  // Unit weights: only its directions and their ratios are used (structure_degeneracy_ratio).
+  Eigen::Matrix3d StructureInformation(const Pose2& T_world_base) const {
+    Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+    const Eigen::Vector2d t = T_world_base.translation();
+    for (std::size_t i = 0; i + 1 < pair_begin.size(); ++i) {
+      const int begin = pair_begin[i], end = pair_begin[i + 1];
+      if (begin == end) continue;
+      const Eigen::Vector2d p = T_world_base * meas_base[i];
+      int best_k = begin;
+      double best = std::numeric_limits<double>::infinity();
+      for (int k = begin; k < end; ++k) {
+        const double d2 = (p - pairs[static_cast<std::size_t>(k)].p_ref_world).squaredNorm();
+        if (d2 < best) {
+          best = d2;
+          best_k = k;
+        }
+      }
+      const Eigen::Vector2d& n = pairs[static_cast<std::size_t>(best_k)].n_world;
+      if (n.squaredNorm() == 0.0) continue;  // not line-like there (a corner, clutter)
+      const Eigen::RowVector3d j = n.transpose() * PointJacobian(t, p);
+      H.noalias() += j.transpose() * j;
+    }
+    return H;
   }
 
   // Of the measurement points with pairs, the fraction whose nearest reference point lies
@@ -1128,7 +1162,25 @@ const BaseEstimate& BaseStateEstimator::AddScan(const LaserScan& scan,
   double lever_sq = 0.0;
   for (const auto& q : m.meas_base) lever_sq += q.squaredNorm();
   const double lever = std::sqrt(std::max(lever_sq / static_cast<double>(m.meas_base.size()), 1e-6));
-  const Eigen::Matrix3d info_scan = ne.H / residual_var;
+  Eigen::Matrix3d info_scan = ne.H / residual_var;
+  if (informative && o.structure_degeneracy_ratio > 0.0) {
+    // Directions the structure leaves (nearly) unconstrained carry no information whatever the
+    // kernel sum's curvature says: remove them, so the analysis below hands them to the prior.
+    const double l = std::max(lever, 1e-3);
+    const Eigen::Vector3d scale(1.0, 1.0, 1.0 / l);  // (x, y, lever * theta) -> (x, y, theta)
+    const Eigen::Matrix3d S = m.StructureInformation(solved);
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(scale.asDiagonal() * S * scale.asDiagonal());
+    const double smax = es.eigenvalues()(2);
+    Eigen::Matrix3d P = Eigen::Matrix3d::Identity();
+    for (int i = 0; i < 3; ++i) {
+      if (!(es.eigenvalues()(i) >= o.structure_degeneracy_ratio * smax)) {
+        P -= es.eigenvectors().col(i) * es.eigenvectors().col(i).transpose();
+      }
+    }
+    const Eigen::Vector3d unscale = scale.cwiseInverse();
+    const Eigen::Matrix3d H_scaled = scale.asDiagonal() * info_scan * scale.asDiagonal();
+    info_scan = unscale.asDiagonal() * (P * H_scaled * P) * unscale.asDiagonal();
+  }
 
   if (informative) {
     // Degenerate directions against the prior; the gate over the others (degeneracy.h).

@@ -155,6 +155,15 @@ struct EstimatorOptions {
   // Failure detection.
   double min_matched_fraction{0.3};  ///< fewer points with a reference neighbour: failed
   double degeneracy_ratio{0.02};     ///< min/max eigenvalue of the (scaled) information below: degenerate
+  /// With an informative prior only (0: off). Degeneracy from the scene's structure rather than
+  /// the kernel sum's curvature (which ripples along a wall of discrete reference points and
+  /// fakes information along it): the point-to-line information of the matched points, each
+  /// with the local normal of its nearest reference point (Zhang, Kaess, Singh 2016). Its
+  /// (scaled) directions weaker than this fraction of its strongest are removed from the match's
+  /// information, so the prior alone decides them, and they are reported as degenerate.
+  double structure_degeneracy_ratio{0.0};
+  /// [m] radius of the PCA that gives the reference points' normals for the above.
+  double structure_normal_radius{0.3};
   double max_rotation_jump_deg{5.0}; ///< [deg] match disagrees with the gyro by more: failed
   double max_translation_jump{0.3};  ///< [m] match farther from the prediction: failed
   /// This many scans in a row with too few matched points (the robot left the mapped area)

@@ -53,7 +53,8 @@ EstimatorOptions EstimatorOptions::FromConfig(const ConfigNode& node) {
                    "reseed_after_failures", "max_reference_gap_sigmas", "end_margin_sigmas",
                    "prior_weight", "reference_weighting", "interpolate_reference",
                    "keyframe_capacity", "thinning", "deskew", "min_inlier_fraction",
-                   "gate_probability", "gate_translation_only", "window_gate_probability", "window_gate_distance", "remap_degenerate", "prior_scale_window"});
+                   "gate_probability", "gate_translation_only", "window_gate_probability", "window_gate_distance", "remap_degenerate", "prior_scale_window",
+                   "structure_degeneracy_ratio", "structure_normal_radius"});
   node.ReadNonNegative("min_range", o.min_range);
   node.ReadPositive("max_range", o.max_range);
   node.ReadNonNegative("min_point_spacing", o.min_point_spacing);
@@ -91,6 +92,8 @@ EstimatorOptions EstimatorOptions::FromConfig(const ConfigNode& node) {
   node.ReadPositive("converged_step", o.converged_step);
   node.ReadInRange("min_matched_fraction", o.min_matched_fraction, 0.0, 1.0);
   node.ReadInRange("degeneracy_ratio", o.degeneracy_ratio, 0.0, 1.0);
+  node.ReadInRange("structure_degeneracy_ratio", o.structure_degeneracy_ratio, 0.0, 1.0);
+  node.ReadPositive("structure_normal_radius", o.structure_normal_radius);
   node.ReadPositive("max_rotation_jump_deg", o.max_rotation_jump_deg);
   node.ReadPositive("max_translation_jump", o.max_translation_jump);
   node.ReadNonNegative("reseed_after_failures", o.reseed_after_failures);

@@ -37,25 +37,11 @@ ScanSpec Sick181() {
 // over-reports the distance by 3 % (a worn wheel); the estimate must follow it along the axis
 // (not slide) and report the axis as the degenerate direction.
 //
-// The references are sampled as polylines here (interpolate_reference, no arc-length weights):
-// with carmen.yaml's raw thinned reference points the kernel sum keeps a ripple along the walls
-// that the match takes for information along the corridor (ratio ~0.05, not degenerate), and the
-// estimate slides (2.4 m after 20.6 m of odometry). Raw points are kept in carmen.yaml because
-// polylines cost the shared logs accuracy (MIT CSAIL 0.56 m, ACES 1.06 m): an open problem, see
-// README.md. (Its thinning and degeneracy_ratio are replaced too, below.) With carmen.yaml as
-// shipped (window gate on) the slide is caught but not cured: 61 of the 100 scans are flagged
-// (the match falls behind the odometry chain over the last metre) and the estimate ends 1.09 m
-// behind the odometry; the open problem is the ripple, not the status.
+// carmen.yaml as shipped: the match's kernel sum over raw reference points ripples along the
+// walls, but degeneracy is read from the point-to-line structure (structure_degeneracy_ratio),
+// which has no such ripple, so the axis goes to the odometry.
 TEST(RecordedLog, CorridorFollowsOdometryAlongTheAxisAndReportsTheDegenerateDirection) {
-  EstimatorOptions o = RecordedLogOptions();
-  o.interpolate_reference = true;
-  o.reference_weighting = ReferenceWeighting::kNone;
-  // carmen.yaml's thinning turns each match by ~0.01 deg one way (see Thinning): 1 deg over the
-  // 70 keyframes of this corridor.
-  o.thinning = Thinning::kNoiseIndependent;
-  // And scan directions under 2 % of the strongest are not trusted (carmen.yaml: 0, which
-  // measured better on the shared logs but lets this corridor slide: 0.65 m after 20.6 m).
-  o.degeneracy_ratio = 0.02;
+  const EstimatorOptions o = RecordedLogOptions();
   const OdometryNoise noise = RecordedLogNoise();
   BaseStateEstimator estimator(o, Pose2());
   const World world = testing::Corridor(1.0, 400.0);
