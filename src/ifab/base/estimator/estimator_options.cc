@@ -1,7 +1,9 @@
 // EstimatorOptions: reading from YAML and validation; status names.
+#include "ifab/base/estimator/estimator_options.h"
+
 #include <fmt/format.h>
 
-#include "ifab/base/estimator/base_state_estimator.h"
+#include "ifab/base/estimator/estimate.h"
 #include "ifab/core/error.h"
 
 namespace ifab::base {
