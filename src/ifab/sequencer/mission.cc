@@ -99,12 +99,18 @@ Mission::Mission(hal::Robot& robot, MissionComponents components, MissionOptions
       workpiece_(c_.site) {
   const Pose3& T = c_.robot.T_base_base_laser;
   estimator_ = std::make_unique<base::BaseStateEstimator>(c_.estimator, Pose2Of(T));
+  commands_sent_ = std::make_unique<base::TrackCommandHistory>(c_.base_geometry.track_gauge);
   arm_ = std::make_unique<arm::ArmPrimitives>(c_.robot, c_.arm);
   workpiece_.bricks.clear();
   // The fastest turn the tracks allow (one forward, one back at full speed); a gyro reading far
   // beyond it is a shock or a glitch, not motion.
   const auto& g = c_.base_geometry;
   max_gyro_rate_ = o_.max_gyro_rate_factor * 2.0 * g.max_track_speed / std::max(1e-3, g.track_gauge);
+}
+
+void Mission::SendTracks(const TrackCommand& command) {
+  robot_.CommandTracks(command);
+  commands_sent_->Add(command);  // what the controller sent: the commanded-speed prior's input
 }
 
 void Mission::Note(const std::string& kind, const std::string& what) {
@@ -248,8 +254,14 @@ void Mission::PumpSensors() {
   for (const auto& scan : scans) {
     const double t_scan = scan.MidTime();
     while (gi < gyro.size() && gyro[gi].stamp.t <= t_scan) estimator_->AddGyro(gyro[gi++]);
-    const base::BaseEstimate& e = estimator_->AddScan(scan);
+    // The commanded track speeds since the previous scan as a weak motion prior (an option;
+    // the default is the paper's gyro-only eq. 2).
+    const auto& commanded = c_.estimator.commanded_speeds;
+    const base::BaseEstimate& e =
+        commanded.use ? estimator_->AddScan(scan, commands_sent_->Measure(last_scan_mid_, t_scan, commanded.noise))
+                      : estimator_->AddScan(scan);
     last_scan_mid_ = t_scan;
+    commands_sent_->DropBefore(t_scan);
     if (e.IsUsable() || e.status == base::EstimateStatus::kTooFewPoints) T_site_base_ = e.T_world_base;
     if (trace_) trace_->push_back({e.t, e.T_world_base});
   }
@@ -319,7 +331,7 @@ bool Mission::RunArmSteps(const arm::PrimitiveResult& steps, const std::string& 
 }
 
 void Mission::StopSafely(const std::string& why) {
-  robot_.CommandTracks({robot_.Now(), 0.0, 0.0});
+  SendTracks({robot_.Now(), 0.0, 0.0});
   if (!stopped_) {
     stopped_ = true;
     stop_reason_ = why;
@@ -410,7 +422,7 @@ bool Mission::Reposition(const BuildingPosition& goal, VisitLog& log) {
     log.failure = stop_reason_;
     return false;
   }
-  robot_.CommandTracks({robot_.Now(), 0.0, 0.0});
+  SendTracks({robot_.Now(), 0.0, 0.0});
   for (double t = 0; t < o_.settle_time; t += o_.control_period) {
     robot_.Wait(o_.control_period);
     PumpSensors();
@@ -449,9 +461,9 @@ base::BaseControllerOutput Mission::Follow(const base::BaseTrajectory& trajector
       continue;
     }
     command.t = robot_.Now();
-    robot_.CommandTracks(command);
+    SendTracks(command);
   }
-  robot_.CommandTracks({robot_.Now(), 0.0, 0.0});
+  SendTracks({robot_.Now(), 0.0, 0.0});
   return u;
 }
 
@@ -481,7 +493,7 @@ bool Mission::HoldWhileUnsafe(double direction, Seconds* held) {
     const bool blocked = !silent && std::abs(direction) > 1e-6 &&
                          PointsInProtectiveField(direction) >= o_.protective_field_points;
     if (!silent && !blocked) break;
-    if (*held == 0.0) robot_.CommandTracks({robot_.Now(), 0.0, 0.0});
+    if (*held == 0.0) SendTracks({robot_.Now(), 0.0, 0.0});
     if (silent && !noted_silence) {
       Note("base_laser_silent", fmt::format("no base laser scan for {:.2f} s: stopped the base to wait for it",
                                             robot_.Now() - last_base_scan_arrival_));
@@ -760,7 +772,7 @@ std::vector<VisitLog> Mission::Run(const BuildingPlan& plan) {
     logs.push_back(std::move(log));
   }
   if (!stopped_ && (q_ - o_.q_park).cwiseAbs().maxCoeff() > 1e-3) RunArm(arm_->MoveToJoints(q_, o_.q_park), "park the arm");
-  robot_.CommandTracks({robot_.Now(), 0.0, 0.0});
+  SendTracks({robot_.Now(), 0.0, 0.0});
   return logs;
 }
 

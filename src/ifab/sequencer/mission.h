@@ -21,6 +21,7 @@
 #include "ifab/arm/primitives.h"
 #include "ifab/base/controller/trajectory_controller.h"
 #include "ifab/base/estimator/base_state_estimator.h"
+#include "ifab/base/estimator/commanded_motion.h"
 #include "ifab/base/planner/stomp_planner.h"
 #include "ifab/hal/robot.h"
 #include "ifab/model/robot_model.h"
@@ -166,6 +167,8 @@ class Mission {
   bool PlaceBrick(int k, VisitLog& log);
   /// The base's pose for placing now: the reference pose, turned by the measured tilt change.
   Pose3 PlacingPose(VisitLog& log);
+  /// Command the tracks and record the command (the commanded-speed prior integrates them).
+  void SendTracks(const TrackCommand& command);
   void StopSafely(const std::string& why);
   void Progress(const std::string& text);
   /// Drain the robot's sensor queues: clocks, gyro and base scans into the estimator.
@@ -187,6 +190,7 @@ class Mission {
   MissionOptions o_;
   RandomStream rng_;
   std::unique_ptr<base::BaseStateEstimator> estimator_;
+  std::unique_ptr<base::TrackCommandHistory> commands_sent_;  ///< every track command sent, for the estimator
   std::unique_ptr<arm::ArmPrimitives> arm_;
   DeviceClockSync sync_base_laser_, sync_arm_laser_, sync_gyro_, sync_arm_;
   ClockStepDetector step_base_laser_, step_arm_laser_, step_gyro_, step_arm_;  // clock jumps, from raw stamps

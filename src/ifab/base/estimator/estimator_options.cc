@@ -56,7 +56,7 @@ EstimatorOptions EstimatorOptions::FromConfig(const ConfigNode& node) {
                    "prior_weight", "reference_weighting", "interpolate_reference",
                    "keyframe_capacity", "thinning", "deskew", "min_inlier_fraction",
                    "gate_probability", "gate_translation_only", "window_gate_probability", "window_gate_distance", "remap_degenerate", "prior_scale_window",
-                   "structure_degeneracy_ratio", "structure_normal_radius"});
+                   "structure_degeneracy_ratio", "structure_normal_radius", "commanded_speeds"});
   node.ReadNonNegative("min_range", o.min_range);
   node.ReadPositive("max_range", o.max_range);
   node.ReadNonNegative("min_point_spacing", o.min_point_spacing);
@@ -106,6 +106,7 @@ EstimatorOptions EstimatorOptions::FromConfig(const ConfigNode& node) {
   node.ReadPositive("window_gate_distance", o.window_gate_distance);
   node.Read("remap_degenerate", o.remap_degenerate);
   node.ReadNonNegative("prior_scale_window", o.prior_scale_window);
+  if (auto c = node.Find("commanded_speeds")) o.commanded_speeds = CommandedSpeedOptions::FromConfig(*c);
   const std::string problem = o.Validate();
   if (!problem.empty()) ThrowInputError("{}: {}", node.Where(), problem);
   return o;

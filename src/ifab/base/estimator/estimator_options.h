@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "ifab/base/estimator/commanded_motion.h"
 #include "ifab/core/config.h"
 
 namespace ifab::base {
@@ -165,6 +166,10 @@ struct EstimatorOptions {
   /// chi-square median: the scale that makes the innovations consistent (never below 1: the
   /// given noise model is the least a caller claims). 0: the covariance as given.
   int prior_scale_window{0};
+
+  /// For the caller that feeds the estimator (the mission): hand the commanded track speeds to
+  /// AddScan as a weak motion prior (commanded_motion.h). Off: the paper's gyro-only eq. 2.
+  CommandedSpeedOptions commanded_speeds{};
 
   /// Read the fields a YAML map names (unknown keys are rejected); defaults stay otherwise.
   static EstimatorOptions FromConfig(const ConfigNode& node);

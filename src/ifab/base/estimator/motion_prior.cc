@@ -8,8 +8,8 @@
 
 namespace ifab::base {
 
-OdometryNoise OdometryNoise::FromConfig(const ConfigNode& node) {
-  OdometryNoise n;
+OdometryNoise OdometryNoise::FromConfig(const ConfigNode& node, const OdometryNoise& defaults) {
+  OdometryNoise n = defaults;
   node.ExpectKeys({"translation_per_m", "lateral_per_m", "translation_per_rad", "rotation_per_m",
                    "rotation_per_rad", "translation_floor", "rotation_floor"});
   node.ReadNonNegative("translation_per_m", n.translation_per_m);

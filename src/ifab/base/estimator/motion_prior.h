@@ -38,7 +38,9 @@ struct OdometryNoise {
   double translation_floor{0.005};   ///< [m] sigma of a step with no motion (quantisation)
   double rotation_floor{0.002};      ///< [rad] sigma of a step with no turn (0.1 deg)
 
-  static OdometryNoise FromConfig(const ConfigNode& node);
+  /// The keys the map names on top of `defaults` (unknown keys are rejected).
+  static OdometryNoise FromConfig(const ConfigNode& node, const OdometryNoise& defaults);
+  static OdometryNoise FromConfig(const ConfigNode& node) { return FromConfig(node, OdometryNoise{}); }
   std::string Validate() const;
 };
 
