@@ -120,6 +120,17 @@ class LrfModel {
     constexpr int kPoseSegments = 16;  // the pose is interpolated between 17 samples per scan
     Pose3 poses[kPoseSegments + 1];
     for (int k = 0; k <= kPoseSegments; ++k) poses[k] = T_site_laser_at(double(k) / kPoseSegments);
+    // The beam angles' cos and sin, once per laser (the same values as computing them per scan).
+    if (beam_cos_sin_.size() != static_cast<std::size_t>(n) || beam_angle_min_ != scan.angle_min ||
+        beam_angle_increment_ != scan.angle_increment) {
+      beam_cos_sin_.resize(static_cast<std::size_t>(n));
+      for (int i = 0; i < n; ++i) {
+        const double a = scan.Angle(static_cast<std::size_t>(i));
+        beam_cos_sin_[static_cast<std::size_t>(i)] = Eigen::Vector2d(std::cos(a), std::sin(a));
+      }
+      beam_angle_min_ = scan.angle_min;
+      beam_angle_increment_ = scan.angle_increment;
+    }
     // Pass 1: the nominal beams (one ray cast each).
     for (int i = 0; i < n; ++i) {
       const double s = double(i) / (n - 1);
@@ -128,9 +139,9 @@ class LrfModel {
       Ray& ray = rays_[static_cast<std::size_t>(i)];
       ray.o = (1 - f) * poses[k].translation() + f * poses[k + 1].translation();
       const Eigen::Matrix3d& R = f < 0.5 ? poses[k].linear() : poses[k + 1].linear();
-      const double a = scan.Angle(static_cast<std::size_t>(i));
-      ray.d = R * Eigen::Vector3d(std::cos(a), std::sin(a), 0.0);
-      ray.u = R * Eigen::Vector3d(-std::sin(a), std::cos(a), 0.0);
+      const Eigen::Vector2d& cs = beam_cos_sin_[static_cast<std::size_t>(i)];
+      ray.d = R * Eigen::Vector3d(cs.x(), cs.y(), 0.0);
+      ray.u = R * Eigen::Vector3d(-cs.y(), cs.x(), 0.0);
       ray.w = R.col(2);
       ray.hit = world.CastRay(ray.o, ray.d, 1e-6, options_.range_max + 1.0);
     }
@@ -169,6 +180,8 @@ class LrfModel {
   LrfOptions options_;
   double drift_{0.0};  // [m] warm-up drift added to every range
   mutable std::vector<Ray> rays_;  // scratch of Scan(); an LrfModel is not shared across threads
+  mutable std::vector<Eigen::Vector2d> beam_cos_sin_;  // per beam, for the angles below
+  mutable double beam_angle_min_{0.0}, beam_angle_increment_{0.0};
 };
 
 }  // namespace ifab::sim

@@ -76,6 +76,7 @@ class World {
 
   Site site_;
   FloorField floor_;
+  double floor_top_{0.0};  // ground_z + the sum of the waves' amplitudes: no floor point is higher
   std::vector<Entry> statics_;  // walls and obstacles
   std::vector<Entry> bricks_;
   Aabb bricks_bounds_;
