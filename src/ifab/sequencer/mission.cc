@@ -602,14 +602,15 @@ bool Mission::Localize(VisitLog& log) {
     std::optional<Pose3> top_before;
     if (o_.measure_top && loc.IsUsable()) {
       SiteBox& top_brick = workpiece_.bricks.back();
-      if (const auto m = MeasureTopFace(log.cloud, loc.T_site_base, top_brick);
-          m && std::abs(m->offset) > 2.0 * m->std) {
+      const double designed_top = top_brick.T_site_box.translation().z() + 0.5 * top_brick.box.size.z();
+      if (const auto m = MeasureTopFace(log.cloud, loc.T_site_base, top_brick, c_.site.ground_z);
+          m && std::abs(c_.site.ground_z + m->height - designed_top) > 2.0 * m->std) {
         top_before = top_brick.T_site_box;
-        top_brick.T_site_box.translation().z() += m->offset;
+        top_brick.T_site_box.translation().z() += c_.site.ground_z + m->height - designed_top;
         model.bricks = workpiece_.bricks;
         loc = LocalizeInSite(log.cloud, model, loc.T_site_base, c_.registration, true);
-        spdlog::debug("{}: top face {:+.2f} mm ({:.2f} mm, {} points) off the model; registered again", log.position,
-                      1e3 * m->offset, 1e3 * m->std, m->points);
+        spdlog::debug("{}: top face {:.1f} mm above the floor ({:.2f} mm, {} / {} points); registered again",
+                      log.position, 1e3 * m->height, 1e3 * m->std, m->points, m->floor_points);
       }
     }
     log.registration_report = loc.registration.BriefReport();

@@ -61,8 +61,8 @@ struct MissionOptions {
   /// height is measured from its top face and the model (and the next brick's goal) follow it.
   /// Bricks vary in height (EN 771-1 T1 allows +-2.9 mm on a 52 mm mean), so after n bricks the
   /// designed top can be millimetres off, and a top face seen obliquely then pulls the fit
-  /// sideways. false: the designed stack (the paper).
-  bool measure_top{true};
+  /// sideways. Off: on seeds 1-3 it did not help (README, issue 12); false: the designed stack.
+  bool measure_top{false};
   /// Re-approaches (reverse and forward along the goal's line) when the maneuver ends with a
   /// sideways offset beyond the controller's tolerance; 0: the paper's single maneuver.
   int max_reapproaches{2};
@@ -91,8 +91,10 @@ struct MissionOptions {
   /// prior by their covariance (a small workpiece pins them loosely).
   double attitude_prior_deg{0.1};
   /// The prior updates the registered pose with the registration's full covariance (a Kalman
-  /// update); false: height, roll and pitch each fused alone (the earlier variant).
-  bool full_covariance_prior{true};
+  /// update); false: height, roll and pitch each fused alone (the default: on seeds 1-3 the
+  /// full update kept the registration's tilt, which the straight-column model of a stack whose
+  /// bricks sit a few mm apart biases by tenths of a degree; README, issue 12).
+  bool full_covariance_prior{false};
   double height_prior_m{0.004};
   double tilt_window{2.0};           ///< [s] accelerometer average (80 ug/sqrt(Hz): 6e-5 rad over 2 s)
 
