@@ -327,7 +327,11 @@ nlohmann::json Run(const RunContext& ctx) {
   robot.replay = &replay;
   sequencer::Mission mission(robot, parts, mission_options, ctx.seed);
   std::size_t visits_done = 0;  // the share of the mission done, for the progress line
-  mission.on_visit_end = [&](sequencer::VisitLog&) { ++visits_done; };
+  std::vector<Pose3> true_T_site_base_at_end;  // per visit, for diagnosis (scoring only)
+  mission.on_visit_end = [&](sequencer::VisitLog&) {
+    ++visits_done;
+    true_T_site_base_at_end.push_back(sim.true_T_site_base());
+  };
   mission.on_progress = [&](const std::string& text) {
     ctx.Progress(text, static_cast<double>(visits_done) / static_cast<double>(plan.visits.size()));
   };
@@ -372,7 +376,8 @@ nlohmann::json Run(const RunContext& ctx) {
   planned_csv << "visit,index,x,y,theta,v,omega\n";
   est_csv << "visit,t,x,y,theta\n";
   visits_csv << "visit,position,desired_x,desired_y,desired_theta,end_x,end_y,end_theta,localized,loc_x,loc_y,"
-                "loc_theta,sweeps,reapproaches,failure\n";
+                "loc_theta,sweeps,reapproaches,failure,reg_z_mm,reg_roll_deg,reg_pitch_deg,true_z_mm,true_roll_deg,"
+                "true_pitch_deg\n";
   int repositionings = 0;
   for (const auto& log : logs) {
     for (std::size_t i = 0; i < log.plan.trajectory.points.size(); ++i) {
@@ -382,11 +387,19 @@ nlohmann::json Run(const RunContext& ctx) {
     }
     for (const auto& s : log.estimated)
       est_csv << fmt::format("{},{:.3f},{:.4f},{:.4f},{:.5f}\n", log.visit, s.t, s.value.x, s.value.y, s.value.theta);
-    visits_csv << fmt::format("{},{},{:.4f},{:.4f},{:.5f},{:.4f},{:.4f},{:.5f},{},{:.4f},{:.4f},{:.5f},{},{},\"{}\"\n",
+    visits_csv << fmt::format("{},{},{:.4f},{:.4f},{:.5f},{:.4f},{:.4f},{:.5f},{},{:.4f},{:.4f},{:.5f},{},{},\"{}\"",
                               log.visit, log.position, log.desired.x, log.desired.y, log.desired.theta,
                               log.end_estimate.x, log.end_estimate.y, log.end_estimate.theta, log.localized,
                               log.localized_pose.x, log.localized_pose.y, log.localized_pose.theta, log.sweeps,
                               log.reapproaches, log.failure);
+    {
+      // The full pose placing used, beside the true one at the visit's end (scoring only).
+      const auto reg = XyzRpyFromPose(log.T_site_base_registered);
+      const std::size_t k = static_cast<std::size_t>(&log - logs.data());
+      const auto tru = XyzRpyFromPose(k < true_T_site_base_at_end.size() ? true_T_site_base_at_end[k] : Pose3::Identity());
+      visits_csv << fmt::format(",{:.3f},{:.4f},{:.4f},{:.3f},{:.4f},{:.4f}\n", 1e3 * reg[2], RadToDeg(reg[3]),
+                                RadToDeg(reg[4]), 1e3 * tru[2], RadToDeg(tru[3]), RadToDeg(tru[4]));
+    }
     if (log.visit == 0 || log.plan.trajectory.empty()) continue;
     ++repositionings;
     end_m.Add(TranslationDistance(log.end_estimate, log.desired));

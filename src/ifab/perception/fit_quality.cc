@@ -62,12 +62,22 @@ FitQuality AssessFit(const std::vector<double>& whitened, double cost, int num_r
                              : fmt::format("the estimated noise scale did not settle (last step off by {:.2f}x)",
                                            f.robust_scale);
   } else {
-    f.consistent = tolerance <= 0.0 || (f.robust_scale < tolerance && f.robust_scale > 1.0 / tolerance);
-    f.message = f.consistent ? fmt::format("residuals agree with the noise model (robust spread {:.2f} sigma)", f.robust_scale)
-                             : fmt::format("the noise model does not explain the residuals: their robust spread is "
-                                           "{:.2f} sigma of the model (tolerance {:.1f}x); give the --sensor profile "
-                                           "of this laser, or none to estimate the noise",
-                                           f.robust_scale, tolerance);
+    // One-sided: residuals wider than the model mean the gate and the loss cut too close and the
+    // model's error bars are too tight (not usable). Narrower residuals (a unit or a range that
+    // is less noisy than its profile) are safe: the covariance is scaled down to their spread by
+    // s0^2, and the gate and the loss only cut later than they could.
+    f.consistent = tolerance <= 0.0 || f.robust_scale < tolerance;
+    if (!f.consistent)
+      f.message = fmt::format("the noise model does not explain the residuals: their robust spread is "
+                              "{:.2f} sigma of the model (tolerance {:.1f}x); give the --sensor profile "
+                              "of this laser, or none to estimate the noise",
+                              f.robust_scale, tolerance);
+    else if (tolerance > 0.0 && f.robust_scale < 1.0 / tolerance)
+      f.message = fmt::format("residuals narrower than the noise model (robust spread {:.2f} sigma): the "
+                              "covariance is scaled to them (s0^2 = {:.2f})",
+                              f.robust_scale, f.variance_factor);
+    else
+      f.message = fmt::format("residuals agree with the noise model (robust spread {:.2f} sigma)", f.robust_scale);
   }
   return f;
 }

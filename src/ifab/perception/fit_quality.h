@@ -23,7 +23,7 @@ struct FitQuality {
   double chi2_z{0.0};                 ///< normal score of sum r^2 under chi^2(n - p) (Wilson-Hilferty)
   double robust_scale{1.0};           ///< 1.4826 median |r| of the inliers, gate-corrected (1: fits)
   double within_1sigma{0.0};          ///< fraction of inliers with |r| < 1 (0.68 if the model fits)
-  bool consistent{true};              ///< robust_scale within the tolerance
+  bool consistent{true};              ///< robust_scale below the tolerance (a wider model is safe)
   std::string message;
 };
 

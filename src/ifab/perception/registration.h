@@ -74,9 +74,10 @@ struct RegistrationOptions {
   double gate_sigmas{0.0};             ///< points whose range error exceeds this many sigmas of the
                                        ///< noise model get zero error (0 = off; max_distance caps it)
   double fit_tolerance{2.0};           ///< usable only if the inliers' robust spread (1.4826 median
-                                       ///< |whitened error|) is within this factor of the noise
-                                       ///< model's (gate and loss are in sigmas: they mean nothing
-                                       ///< if sigma is off by more); 0 = no test
+                                       ///< |whitened error|) is below this factor of the noise
+                                       ///< model's (gate and loss are in sigmas: they cut too close
+                                       ///< if sigma is too small); a narrower spread is safe (the
+                                       ///< covariance is scaled to it); 0 = no test
   RegistrationResidual residual{RegistrationResidual::kRay};  ///< error per point (kClosest: the paper)
   int max_iterations{30};              ///< correspondence steps (match, then solve)
   int coarse_stride{1};                ///< the first steps use every n-th matched point, until a

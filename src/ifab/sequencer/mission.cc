@@ -10,7 +10,9 @@
 
 #include "ifab/core/angles.h"
 #include "ifab/core/config.h"
+#include "ifab/sequencer/floor_prior.h"
 #include "ifab/sequencer/tilt.h"
+#include "ifab/sequencer/top_face.h"
 
 namespace ifab::sequencer {
 namespace {
@@ -26,7 +28,7 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
   c.ExpectKeys({"control_period", "drive_timeout_factor", "drive_timeout_margin", "settle_time", "plan_attempts",
                 "max_sweeps", "min_inliers", "max_localization_std_m", "max_localization_std_deg",
                 "max_localization_jump_m", "scan_distance", "scan_elevation_deg", "sweep_half_angle_deg",
-                "sweep_speed_deg_s", "crop_radius", "park_joints_deg", "localize", "place_bricks", "max_reapproaches",
+                "sweep_speed_deg_s", "crop_radius", "park_joints_deg", "localize", "place_bricks", "measure_top", "full_covariance_prior", "max_reapproaches",
                 "reapproach_tolerance", "reapproach_distance", "reapproach_speed", "tilt_compensation", "tilt_settle",
                 "tilt_window", "attitude_prior_deg", "height_prior_m", "max_scan_gap",
                 "sensor_wait_timeout", "protective_field", "protective_field_points", "protective_field_margin",
@@ -50,6 +52,8 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
   c.ReadPositive("crop_radius", o.crop_radius);
   c.Read("localize", o.localize);
   c.Read("place_bricks", o.place_bricks);
+  c.Read("measure_top", o.measure_top);
+  c.Read("full_covariance_prior", o.full_covariance_prior);
   c.ReadNonNegative("max_reapproaches", o.max_reapproaches);
   c.ReadPositive("reapproach_tolerance", o.reapproach_tolerance);
   c.ReadPositive("reapproach_distance", o.reapproach_distance);
@@ -604,7 +608,23 @@ bool Mission::Localize(VisitLog& log) {
     Site model = workpiece_;  // register against the workpiece (the stack as built) and the ground
     model.walls.clear();
     model.obstacles.clear();
-    const SiteLocalization loc = LocalizeInSite(log.cloud, model, T_site_base, c_.registration, true);
+    SiteLocalization loc = LocalizeInSite(log.cloud, model, T_site_base, c_.registration, true);
+    // The stack as built (measure_top): move the model's top brick to the height its top face is
+    // seen at, and register again when that moved it by more than twice the measurement's error.
+    std::optional<Pose3> top_before;
+    if (o_.measure_top && loc.IsUsable()) {
+      SiteBox& top_brick = workpiece_.bricks.back();
+      const double designed_top = top_brick.T_site_box.translation().z() + 0.5 * top_brick.box.size.z();
+      if (const auto m = MeasureTopFace(log.cloud, loc.T_site_base, top_brick, c_.site.ground_z);
+          m && std::abs(c_.site.ground_z + m->height - designed_top) > 2.0 * m->std) {
+        top_before = top_brick.T_site_box;
+        top_brick.T_site_box.translation().z() += c_.site.ground_z + m->height - designed_top;
+        model.bricks = workpiece_.bricks;
+        loc = LocalizeInSite(log.cloud, model, loc.T_site_base, c_.registration, true);
+        spdlog::debug("{}: top face {:.1f} mm above the floor ({:.2f} mm, {} / {} points); registered again",
+                      log.position, 1e3 * m->height, 1e3 * m->std, m->points, m->floor_points);
+      }
+    }
     log.registration_report = loc.registration.BriefReport();
     log.cloud_labels = loc.registration.labels;
     // Trust is judged on the workpiece's pose in the base frame: that is what placing a brick
@@ -623,6 +643,7 @@ bool Mission::Localize(VisitLog& log) {
     else if (jump > o_.max_localization_jump_m) why = fmt::format("correction of {:.3f} m", jump);
     for (const auto& b : loc.registration.bodies)
       if (b.name != "ground" && !b.unconstrained.empty() && why.empty()) why = "unconstrained: " + b.unconstrained.front();
+    if (!why.empty() && top_before) workpiece_.bricks.back().T_site_box = *top_before;  // not measured after all
     if (!why.empty()) {
       spdlog::warn("{}: registration not trusted ({}); {}", log.position, why, log.registration_report);
       for (const auto& b : loc.registration.bodies) {
@@ -644,21 +665,8 @@ bool Mission::Localize(VisitLog& log) {
     T_site_base_ = localized;
     // The registered full pose and the IMU's up direction while it was scanned (the sweep turns
     // only joint 1 about the vertical: the arm's moment, and so the tilt, barely changes).
-    {
-      // The registered height, roll and pitch fused with the floor's prior (flat at ground_z) by
-      // their variances: the workpiece's faces pin them as well as its size allows.
-      const auto v = XyzRpyFromPose(loc.T_site_base);
-      auto fuse = [](double measured, double variance, double prior_mean, double prior_sigma) {
-        const double w = prior_sigma * prior_sigma / (prior_sigma * prior_sigma + std::max(0.0, variance));
-        return prior_mean + w * (measured - prior_mean);
-      };
-      const double var_tilt = 0.5 * (loc.covariance(3, 3) + loc.covariance(4, 4));  // about horizontal axes
-      const double sigma_tilt = DegToRad(o_.attitude_prior_deg);
-      T_site_base_ref_ = PoseFromXyzRpy(localized.x, localized.y,
-                                        fuse(v[2], loc.covariance(2, 2), c_.site.ground_z, o_.height_prior_m),
-                                        fuse(v[3], var_tilt, 0.0, sigma_tilt), fuse(v[4], var_tilt, 0.0, sigma_tilt),
-                                        localized.theta);
-    }
+    T_site_base_ref_ = FuseWithFloorPrior(loc.T_site_base, loc.covariance);
+    log.T_site_base_registered = T_site_base_ref_;
     up_ref_ = MeanUp(accel_, sweep_t0, sweep_t1);
     // The registered pose holds from the scan on (the base stood still): reset at the last scan
     // the estimator has seen, so the next one follows it in time.
@@ -667,6 +675,12 @@ bool Mission::Localize(VisitLog& log) {
   }
   StopSafely(fmt::format("{}: no trusted localization after {} sweeps ({})", log.position, log.sweeps, log.failure));
   return false;
+}
+
+Pose3 Mission::FuseWithFloorPrior(const Pose3& T_site_base, const Matrix6d& covariance) const {
+  const FloorPrior prior{c_.site.ground_z, o_.height_prior_m, DegToRad(o_.attitude_prior_deg)};
+  return o_.full_covariance_prior ? FuseFloorPrior(T_site_base, covariance, prior)
+                                  : FuseFloorPriorPerComponent(T_site_base, covariance, prior);
 }
 
 Pose3 Mission::PlacingPose(VisitLog& log) {
@@ -690,7 +704,12 @@ bool Mission::PlaceBrick(int k, VisitLog& log) {
   const bool full_pose = o_.tilt_compensation != TiltCompensation::kNone;
   const Pose3 T_site_base = full_pose ? T_site_base_ref_ : Pose3Of(T_site_base_);
   const Pose3 T_site_feeder = T_site_base * o_.T_base_feeder;
-  const Pose3 T_site_goal = workpiece_.DesignedBrickPose(k);
+  Pose3 T_site_goal = workpiece_.DesignedBrickPose(k);
+  if (o_.measure_top && !workpiece_.bricks.empty()) {  // on the stack as measured
+    const SiteBox& top = workpiece_.bricks.back();
+    T_site_goal.translation().z() =
+        top.T_site_box.translation().z() + 0.5 * top.box.size.z() + 0.5 * c_.site.brick.size.z();
+  }
   // A brick the vacuum loses (a failed grip, a drop on the way) is replaced by the feeder's next
   // one: pick again, up to pick_retries times.
   for (int attempt = 0;; ++attempt) {

@@ -129,6 +129,29 @@ TEST(SensorFrame, ANoiseModelFarFromTheDataIsNotUsable) {
   EXPECT_FALSE(s.IsUsable());
 }
 
+TEST(SensorFrame, ANoiseModelWiderThanTheDataPassesTheFitCheckWithErrorBarsFromTheResiduals) {
+  // A unit less noisy than its profile (8 mm against 24 mm claimed): the fit check passes, and
+  // the plane's reported std follows the residuals (s0^2), close to what the right profile says.
+  const std::vector<RegistrationBody> truth{{"board", kBoardTrue, {Board()}, true}};
+  const std::vector<RayPoint> cloud = Scan(Scene(truth), 0.008, 6);
+  RegistrationOptions wide = EstimatedNoise(), right = EstimatedNoise();
+  wide.noise_source = right.noise_source = NoiseSource::kModel;
+  wide.noise.sigma_along = 0.024;
+  right.noise.sigma_along = 0.008;
+  const auto bodies = BoardGuess();
+  const RegistrationSummary w = Register(cloud, bodies, wide);
+  const RegistrationSummary r = Register(cloud, bodies, right);
+  ASSERT_EQ(w.status, RegistrationStatus::kConverged) << w.BriefReport();
+  ASSERT_EQ(r.status, RegistrationStatus::kConverged) << r.BriefReport();
+  EXPECT_TRUE(w.fit.consistent) << w.BriefReport();
+  EXPECT_LT(w.fit.robust_scale, 0.5) << w.BriefReport();
+  const auto pw = RegisteredPlanes(w, bodies, 0.01), pr = RegisteredPlanes(r, bodies, 0.01);
+  ASSERT_EQ(pw.size(), 1u);
+  ASSERT_EQ(pr.size(), 1u);
+  EXPECT_NEAR(pw[0].offset_std / pr[0].offset_std, 1.0, 0.3);
+  EXPECT_NEAR(pw[0].tilt_std / pr[0].tilt_std, 1.0, 0.3);
+}
+
 TEST(SensorFrame, FixedComponentsStayAtTheGuess) {
   const std::vector<RegistrationBody> truth{{"board", kBoardTrue, {Board()}, true}};
   const std::vector<RayPoint> cloud = Scan(Scene(truth), 0.008, 5);
