@@ -29,6 +29,28 @@ class CollectingHandler : public console_bridge::OutputHandler {
   std::string messages;
 };
 
+// TinyXML 2.6 (urdfdom's parser) steps over a multi-byte UTF-8 lead byte by the length it
+// announces, so a file ending in a truncated or invalid sequence made it read past the end of the
+// text (found by urdf_fuzz under ASan). XML files are UTF-8: check that before either parser runs.
+void RequireUtf8(const std::string& text, const std::string& urdf_path) {
+  int line = 1;
+  for (std::size_t i = 0; i < text.size();) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    if (c == '\n') ++line;
+    std::size_t len = 1;
+    if (c >= 0xC2 && c <= 0xDF) len = 2;
+    else if (c >= 0xE0 && c <= 0xEF) len = 3;
+    else if (c >= 0xF0 && c <= 0xF4) len = 4;
+    else if (c >= 0x80) len = 0;
+    bool ok = len > 0 && i + len <= text.size();
+    for (std::size_t k = 1; ok && k < len; ++k) ok = (static_cast<unsigned char>(text[i + k]) & 0xC0) == 0x80;
+    if (!ok)
+      ThrowInputError("{}: line {}: byte {} (0x{:02x}) is not valid UTF-8; expected a UTF-8 XML file", urdf_path,
+                      line, i, c);
+    i += len;
+  }
+}
+
 // Joints whose parent and child links form a loop (a joint from a link to itself, or a cycle)
 // must be refused before urdfdom sees them: urdfdom links the tree before it looks for the
 // root, and when that then fails ("two root links") it drops a model whose links own each other
@@ -206,6 +228,7 @@ RobotModel LoadRobotModel(const std::string& urdf_path) {
 }
 
 RobotModel ParseRobotModel(const std::string& urdf_text, const std::string& urdf_path) {
+  RequireUtf8(urdf_text, urdf_path);
   RejectJointLoops(urdf_text, urdf_path);
   urdf::ModelInterfaceSharedPtr urdf_model;
   {
