@@ -4,12 +4,12 @@ BUILD_DIR ?= build
 JOBS      ?= 2
 CMAKE_ARGS ?=
 RUN_ARGS  ?=
-# test-sanitize: the whole ctest suite built with AddressSanitizer + UndefinedBehaviorSanitizer
-# (Debian's clang), in its own build folder; benchmarks are not built there.
+# test-sanitize and fuzz share one instrumented build (Debian's clang, build-sanitize/, no
+# benchmarks): everything compiled with AddressSanitizer + UndefinedBehaviorSanitizer and
+# libFuzzer's coverage (IFAB_FUZZ). The whole ctest suite runs there under the sanitizers, and the
+# harnesses of tests/fuzz/ fuzz guided by the coverage of the parsers they call (a separate
+# sanitizer build would fuzz its libraries blind, and cost a second long compile in CI).
 SANITIZE_DIR ?= build-sanitize
-SANITIZE_FLAGS := -fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer
-# fuzz: the libFuzzer harnesses of tests/fuzz/, each run FUZZ_SECONDS from its seed corpus.
-FUZZ_DIR     ?= build-fuzz
 FUZZ_SECONDS ?= 60
 FUZZ_ARGS    ?=
 
@@ -46,9 +46,8 @@ bench: build
 
 $(SANITIZE_DIR)/build.ninja: | deps
 	cmake -S . -B $(SANITIZE_DIR) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-	  -DCMAKE_CXX_COMPILER=clang++ -DIFAB_BUILD_BENCHMARKS=OFF \
-	  "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -gline-tables-only" \
-	  "-DCMAKE_CXX_FLAGS=$(SANITIZE_FLAGS)" "-DCMAKE_EXE_LINKER_FLAGS=$(SANITIZE_FLAGS)" $(CMAKE_ARGS)
+	  -DCMAKE_CXX_COMPILER=clang++ -DIFAB_BUILD_BENCHMARKS=OFF -DIFAB_FUZZ=ON \
+	  "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -gline-tables-only" $(CMAKE_ARGS)
 
 test-sanitize: $(SANITIZE_DIR)/build.ninja
 	cmake --build $(SANITIZE_DIR) -j $(JOBS)
@@ -56,17 +55,12 @@ test-sanitize: $(SANITIZE_DIR)/build.ninja
 	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
 	  ctest --output-on-failure -j $(JOBS) --timeout 1800
 
-$(FUZZ_DIR)/build.ninja: | deps
-	cmake -S . -B $(FUZZ_DIR) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-	  -DCMAKE_CXX_COMPILER=clang++ -DIFAB_BUILD_BENCHMARKS=OFF -DBUILD_TESTING=OFF -DIFAB_FUZZ=ON \
-	  "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -gline-tables-only" $(CMAKE_ARGS)
+fuzz-build: $(SANITIZE_DIR)/build.ninja
+	cmake --build $(SANITIZE_DIR) -j $(JOBS) --target fuzzers
 
-fuzz-build: $(FUZZ_DIR)/build.ninja
-	cmake --build $(FUZZ_DIR) -j $(JOBS) --target fuzzers
-
-# Each harness for FUZZ_SECONDS from its corpus (new inputs are kept in $(FUZZ_DIR)/corpus/).
+# Each harness for FUZZ_SECONDS from its corpus (new inputs are kept in $(SANITIZE_DIR)/fuzz/corpus/).
 fuzz: fuzz-build
-	@scripts/run-fuzzers $(FUZZ_DIR) $(FUZZ_SECONDS) $(FUZZ_ARGS)
+	@scripts/run-fuzzers $(SANITIZE_DIR) $(FUZZ_SECONDS) $(FUZZ_ARGS)
 
 # ifab beside Open3D, OMPL and KDL on the same inputs (bench/peers.cc): one table. Installs the
 # peers first (they are not dependencies of ifab) and re-configures so CMake finds them.
@@ -77,4 +71,4 @@ bench-peers: build
 	$(BUILD_DIR)/bench/peers $(PEERS_ARGS)
 
 clean:
-	rm -rf $(BUILD_DIR) $(SANITIZE_DIR) $(FUZZ_DIR)
+	rm -rf $(BUILD_DIR) $(SANITIZE_DIR)

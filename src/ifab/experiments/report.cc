@@ -35,7 +35,7 @@ std::string ReadText(const fs::path& path) {
 nlohmann::json ReadJson(const fs::path& path) {
   try {
     return nlohmann::json::parse(ReadText(path));
-  } catch (const nlohmann::json::parse_error& e) {
+  } catch (const nlohmann::json::exception& e) {  // parse_error, or out_of_range for 1e405
     ThrowInputError("{}: not valid JSON ({})", path.string(), e.what());
   }
 }

@@ -2,12 +2,16 @@
 
 #include <console_bridge/console.h>
 #include <kdl/chainfksolverpos_recursive.hpp>
+#include <tinyxml.h>
 #include <urdf_parser/urdf_parser.h>
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
 #include <fstream>
+#include <functional>
+#include <map>
 #include <mutex>
+#include <set>
 #include <sstream>
 
 #include "ifab/core/config.h"
@@ -24,6 +28,79 @@ class CollectingHandler : public console_bridge::OutputHandler {
   }
   std::string messages;
 };
+
+// TinyXML 2.6 (urdfdom's parser) steps over a multi-byte UTF-8 lead byte by the length it
+// announces, so a file ending in a truncated or invalid sequence made it read past the end of the
+// text (found by urdf_fuzz under ASan). XML files are UTF-8: check that before either parser runs.
+void RequireUtf8(const std::string& text, const std::string& urdf_path) {
+  int line = 1;
+  for (std::size_t i = 0; i < text.size();) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    if (c == '\n') ++line;
+    std::size_t len = 1;
+    if (c >= 0xC2 && c <= 0xDF) len = 2;
+    else if (c >= 0xE0 && c <= 0xEF) len = 3;
+    else if (c >= 0xF0 && c <= 0xF4) len = 4;
+    else if (c >= 0x80) len = 0;
+    bool ok = len > 0 && i + len <= text.size();
+    for (std::size_t k = 1; ok && k < len; ++k) ok = (static_cast<unsigned char>(text[i + k]) & 0xC0) == 0x80;
+    if (!ok)
+      ThrowInputError("{}: line {}: byte {} (0x{:02x}) is not valid UTF-8; expected a UTF-8 XML file", urdf_path,
+                      line, i, c);
+    i += len;
+  }
+}
+
+// Joints whose parent and child links form a loop (a joint from a link to itself, or a cycle)
+// must be refused before urdfdom sees them: urdfdom links the tree before it looks for the
+// root, and when that then fails ("two root links") it drops a model whose links own each other
+// (shared pointers), which leaks (found by urdf_fuzz under LSan). We read the joints with the
+// XML parser urdfdom itself uses (TinyXML), so both see the same <parent>/<child> names.
+void RejectJointLoops(const std::string& urdf_text, const std::string& urdf_path) {
+  TiXmlDocument doc;
+  doc.Parse(urdf_text.c_str());
+  if (doc.Error()) return;  // urdfdom reports the XML error
+  const TiXmlElement* robot = doc.FirstChildElement("robot");
+  if (!robot) return;
+  std::map<std::string, std::vector<std::pair<std::string, std::string>>> children;  // parent -> (child, joint)
+  for (const TiXmlElement* j = robot->FirstChildElement("joint"); j; j = j->NextSiblingElement("joint")) {
+    const TiXmlElement* parent = j->FirstChildElement("parent");
+    const TiXmlElement* child = j->FirstChildElement("child");
+    const char* parent_link = parent ? parent->Attribute("link") : nullptr;
+    const char* child_link = child ? child->Attribute("link") : nullptr;
+    if (!parent_link || !child_link) continue;  // urdfdom reports it
+    const char* name = j->Attribute("name");
+    if (std::string(parent_link) == child_link)
+      ThrowInputError("{}: line {}: joint '{}': parent and child are the same link '{}' (a loop)", urdf_path,
+                      j->Row(), name ? name : "", parent_link);
+    children[parent_link].emplace_back(child_link, name ? name : "");
+  }
+  // Depth-first search for a cycle; iterative, so a long chain cannot exhaust the stack.
+  std::set<std::string> done, on_path;
+  for (const auto& entry : children) {
+    const std::string& start = entry.first;
+    if (done.count(start)) continue;
+    std::vector<std::pair<std::string, std::size_t>> stack{{start, 0}};
+    on_path.insert(start);
+    while (!stack.empty()) {
+      auto& [link, next] = stack.back();
+      const auto it = children.find(link);
+      if (it == children.end() || next == it->second.size()) {
+        on_path.erase(link);
+        done.insert(link);
+        stack.pop_back();
+        continue;
+      }
+      const auto& [child, joint] = it->second[next++];
+      if (on_path.count(child))
+        ThrowInputError("{}: the joints form a loop: joint '{}' leads from link '{}' back to link '{}'", urdf_path,
+                        joint, link, child);
+      if (done.count(child)) continue;
+      on_path.insert(child);
+      stack.emplace_back(child, 0);
+    }
+  }
+}
 
 KDL::Vector ToKdl(const urdf::Vector3& v) { return {v.x, v.y, v.z}; }
 
@@ -151,6 +228,8 @@ RobotModel LoadRobotModel(const std::string& urdf_path) {
 }
 
 RobotModel ParseRobotModel(const std::string& urdf_text, const std::string& urdf_path) {
+  RequireUtf8(urdf_text, urdf_path);
+  RejectJointLoops(urdf_text, urdf_path);
   urdf::ModelInterfaceSharedPtr urdf_model;
   {
     static std::mutex mutex;  // console_bridge's handler is process-global

@@ -92,8 +92,9 @@ SweepRecording ParseSweep(std::istream& in, const std::string& path) {
   json j;
   try {
     j = json::parse(in);
-  } catch (const json::parse_error& e) {
-    ThrowInputError("{}: not valid JSON: {}", path, e.what());
+  } catch (const json::exception& e) {
+    // parse_error, and out_of_range for a number beyond a double (1e405; found by sweep_fuzz).
+    ThrowInputError("{}: not valid JSON (expected numbers within a double's range): {}", path, e.what());
   }
   const Reader r(path);
   if (!j.is_object() || !j.contains("format") || j["format"] != "ifab-sweep")

@@ -45,6 +45,30 @@ TEST(UrdfHostile, RejectsJointsThatFormALoop) {
               HasSubstr("hostile.urdf: the joints form a loop"));
 }
 
+TEST(UrdfHostile, RejectsAJointFromALinkToItself) {
+  // Found by the fuzzer (tests/fuzz/corpus/urdf/regression_self_joint_leak.urdf): urdfdom links the
+  // tree, then fails ("two root links") and drops links that own each other: a leak under LSan.
+  // Before, the message did not name the joint either.
+  EXPECT_THAT(UrdfError("<parent link=\"link_4\"/>\n    <child link=\"link_5\"/>",
+                        "<parent link=\"link_4\"/>\n    <child link=\"link_4\"/>"),
+              HasSubstr("hostile.urdf: line "));
+  EXPECT_THAT(UrdfError("<parent link=\"link_4\"/>\n    <child link=\"link_5\"/>",
+                        "<parent link=\"link_4\"/>\n    <child link=\"link_4\"/>"),
+              HasSubstr("joint 'joint_5': parent and child are the same link 'link_4' (a loop)"));
+}
+
+TEST(UrdfHostile, RejectsTextThatIsNotUtf8) {
+  // Found by urdf_fuzz (tests/fuzz/corpus/urdf/regression_tinyxml_overread.urdf): TinyXML read past
+  // the end of a file that ends in a truncated UTF-8 sequence (ASan: heap-buffer-overflow).
+  std::string text = Urdf();
+  text.resize(text.rfind("</robot>"));
+  text += "J3 z \xff\xff\xff\xee";
+  const std::string e = ErrorOf([&] { ParseRobotModel(text, "hostile.urdf"); });
+  EXPECT_THAT(e, HasSubstr("hostile.urdf: line "));
+  EXPECT_THAT(e, HasSubstr("(0xff) is not valid UTF-8; expected a UTF-8 XML file"));
+  EXPECT_THAT(ErrorOf([&] { ParseRobotModel(Urdf() + "\xe2\x82", "cut.urdf"); }), HasSubstr("not valid UTF-8"));
+}
+
 TEST(UrdfHostile, RejectsNonFiniteMasses) {
   // urdfdom reads these without complaint, as a mass of 0.
   EXPECT_THAT(UrdfError("<mass value=\"965\"/>", "<mass value=\"nan\"/>"),

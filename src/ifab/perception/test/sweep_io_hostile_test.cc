@@ -50,6 +50,14 @@ TEST(SweepHostile, RejectsStampsOutOfOrder) {
   EXPECT_NE(e.find("scans[1].t: expected a time after scans[0]'s"), std::string::npos) << e;
 }
 
+TEST(SweepHostile, RejectsNumbersBeyondADouble) {
+  // Found by sweep_fuzz (tests/fuzz/corpus/sweep/regression_number_overflow.json): nlohmann's
+  // parser throws out_of_range, not parse_error, for 1e405, and it escaped the loader.
+  const std::string e = ErrorOfSweep(HostSweep(R"("t": 1.0, "range_min": 0.1, "range_max": 1e405, "ranges": [1.0])"));
+  EXPECT_NE(e.find("hostile.json: not valid JSON (expected numbers within a double's range)"), std::string::npos) << e;
+  EXPECT_NE(e.find("1e405"), std::string::npos) << e;
+}
+
 TEST(SweepHostile, RejectsNonNumericFormatVersionAndName) {
   // json::value() threw nlohmann's type_error (no InputError, no file name) for these.
   EXPECT_NE(ErrorOfSweep(R"({"format": 3})").find("not an ifab sweep file"), std::string::npos);
