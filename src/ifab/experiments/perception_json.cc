@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "ifab/experiments/atomic_file.h"
+
 namespace ifab {
 
 using nlohmann::json;
@@ -57,6 +59,12 @@ json FitToJson(const FitQuality& f) {
           {"within_1sigma", f.within_1sigma},
           {"consistent", f.consistent},
           {"message", f.message}};
+}
+
+void SaveSweep(const std::string& path, const SweepRecording& sweep, bool raw_stamps) {
+  experiments::AtomicOfstream out(path);
+  WriteSweep(out, sweep, raw_stamps);
+  out.Commit();
 }
 
 }  // namespace ifab

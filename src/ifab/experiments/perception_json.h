@@ -7,6 +7,7 @@
 
 #include "ifab/core/se3.h"
 #include "ifab/perception/registration.h"
+#include "ifab/perception/sweep_io.h"
 
 namespace ifab {
 
@@ -20,5 +21,8 @@ nlohmann::json StdToJson(const Matrix6d& covariance);
 nlohmann::json BodyToJson(const RegisteredBody& body, bool usable);
 /// The noise model used and the test of the fit (fit_quality.h).
 nlohmann::json FitToJson(const FitQuality& fit);
+
+/// Write a sweep file (perception/sweep_io.h's format), in full or not at all.
+void SaveSweep(const std::string& path, const SweepRecording& sweep, bool raw_stamps = false);
 
 }  // namespace ifab

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <fstream>
+#include <ostream>
 #include <istream>
 
 #include "ifab/core/error.h"
@@ -189,7 +190,7 @@ SweepRecording ParseSweep(std::istream& in, const std::string& path) {
   return s;
 }
 
-void SaveSweep(const std::string& path, const SweepRecording& s, bool raw_stamps) {
+void WriteSweep(std::ostream& out, const SweepRecording& s, bool raw_stamps) {
   json j = {{"format", "ifab-sweep"}, {"version", 1}, {"name", s.name}};
   json scans = json::array();
   for (const auto& scan : s.scans) {
@@ -225,10 +226,7 @@ void SaveSweep(const std::string& path, const SweepRecording& s, bool raw_stamps
       pulses.push_back({{"device", DeviceKey(p.device)}, {"sequence", p.sequence}, {"t_host", p.t_host}});
     j["sync_pulses"] = std::move(pulses);
   }
-  std::ofstream out(path);
-  if (!out) ThrowInputError("{}: cannot open for writing", path);
   out << j.dump();
-  if (!out) ThrowInputError("{}: write failed", path);
 }
 
 }  // namespace ifab

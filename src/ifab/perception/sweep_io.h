@@ -1,7 +1,7 @@
 #pragma once
 /// \file
-/// Recorded arm sweeps on disk, for `ifab calibrate` and for keeping data: one JSON file per
-/// sweep (one joint moving while the arm laser scans).
+/// Recorded arm sweeps, for `ifab calibrate` and for keeping data: one JSON file per sweep (one
+/// joint moving while the arm laser scans). Read here; written by experiments/ and app/.
 ///
 /// Format (version 1):
 ///
@@ -44,7 +44,8 @@ SweepRecording LoadSweep(const std::string& path);
 /// The same from a stream; `name` stands for the file in messages.
 SweepRecording ParseSweep(std::istream& in, const std::string& name);
 
-/// Write a sweep file (host times; pulses and device stamps too if `raw_stamps`).
-void SaveSweep(const std::string& path, const SweepRecording& sweep, bool raw_stamps = false);
+/// The sweep in the file format above (host times; pulses and device stamps too if
+/// `raw_stamps`). This module writes no files: experiments/perception_json.h's SaveSweep does.
+void WriteSweep(std::ostream& out, const SweepRecording& sweep, bool raw_stamps = false);
 
 }  // namespace ifab

@@ -14,6 +14,7 @@
 #include "ifab/perception/calibration.h"
 #include "ifab/perception/ply.h"
 #include "ifab/perception/registration.h"
+#include "ifab/experiments/perception_json.h"
 #include "ifab/perception/sweep_io.h"
 #include "ifab/perception/testing/synthetic.h"
 #include "ifab/sync/clock_sync.h"
