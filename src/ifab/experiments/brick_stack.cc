@@ -248,7 +248,9 @@ nlohmann::json AsBuiltSummary(const Setup& setup) {
                          {"sigma_along_at_2m_mm", 1e3 * unit.SigmaAlong(2.0, 0.0)},
                          {"warmup_amplitude_mm", 1e3 * unit.warmup_amplitude}}},
           {"base_laser_mount_error", mount(a.base_laser_mount_error)},
-          {"arm_laser_mount_error", mount(a.arm_laser_mount_error)}};
+          {"arm_laser_mount_error", mount(a.arm_laser_mount_error)},
+          {"imu_mount_error_rpy_deg",
+           {RadToDeg(a.imu_mount_error_rpy[0]), RadToDeg(a.imu_mount_error_rpy[1]), RadToDeg(a.imu_mount_error_rpy[2])}}};
 }
 
 }  // namespace

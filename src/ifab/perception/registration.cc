@@ -277,9 +277,13 @@ std::vector<RegisteredPlane> RegisteredPlanes(const RegistrationSummary& summary
 }
 
 SiteLocalization LocalizeInSite(const std::vector<RayPoint>& cloud, const Site& site, const Pose3& T_site_base_guess,
-                                const RegistrationOptions& options, bool separate_ground) {
+                                const RegistrationOptions& options, bool separate_ground,
+                                const std::array<bool, 6>& site_fixed) {
   SiteLocalization out;
-  out.registration = Register(cloud, SiteBodies(site, T_site_base_guess, separate_ground), options);
+  std::vector<RegistrationBody> bodies = SiteBodies(site, T_site_base_guess, separate_ground);
+  for (auto& b : bodies)
+    if (b.name == "site") b.fixed = site_fixed;
+  out.registration = Register(cloud, bodies, options);
   const RegisteredBody* body = out.registration.Find("site");
   if (!body) {  // the site has no object but the ground: nothing to locate the robot by
     out.unconstrained = {"the site has no object besides the ground"};

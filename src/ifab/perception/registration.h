@@ -19,6 +19,7 @@
 /// follows from the registered workpiece (LocalizeInSite).
 
 #include <Eigen/Core>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -215,9 +216,11 @@ struct SiteLocalization {
   std::vector<std::string> unconstrained;  ///< directions of the site body the cloud leaves free
   bool IsUsable() const { return registration.IsUsable() && unconstrained.empty(); }
 };
+/// `site_fixed`: components of the site body ([x y z rx ry rz], base axes through the site
+/// origin) held at the guess, e.g. roll and pitch set by the IMU's gravity direction.
 SiteLocalization LocalizeInSite(const std::vector<RayPoint>& cloud, const Site& site,
                                 const Pose3& T_site_base_guess, const RegistrationOptions& options = {},
-                                bool separate_ground = true);
+                                bool separate_ground = true, const std::array<bool, 6>& site_fixed = {});
 
 /// Covariance of T^-1 from the covariance of T, both in the [x y z rx ry rz] convention above.
 Matrix6d InverseCovariance(const Pose3& T, const Matrix6d& covariance);

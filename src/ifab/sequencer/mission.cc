@@ -30,7 +30,7 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
                 "max_localization_jump_m", "scan_distance", "scan_elevation_deg", "sweep_half_angle_deg",
                 "sweep_speed_deg_s", "crop_radius", "park_joints_deg", "localize", "place_bricks", "measure_top", "full_covariance_prior", "max_reapproaches",
                 "reapproach_tolerance", "reapproach_distance", "reapproach_speed", "tilt_compensation", "tilt_settle",
-                "tilt_window", "attitude_prior_deg", "height_prior_m", "max_scan_gap",
+                "tilt_window", "attitude_prior_deg", "height_prior_m", "registration_attitude", "imu_tilt_sigma_deg", "check_placement", "placement_correction", "min_brick_inliers", "max_scan_gap",
                 "sensor_wait_timeout", "protective_field", "protective_field_points", "protective_field_margin",
                 "obstacle_wait_timeout", "max_stamp_lag", "max_gyro_rate_factor", "arm_retries", "pick_retries",
                 "drive_retries"});
@@ -84,6 +84,16 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
   c.ReadPositive("tilt_window", o.tilt_window);
   c.ReadPositive("attitude_prior_deg", o.attitude_prior_deg);
   c.ReadPositive("height_prior_m", o.height_prior_m);
+  if (auto t = c.Find("registration_attitude")) {
+    const std::string v = t->As<std::string>();
+    if (v == "imu") o.registration_attitude = RegistrationAttitude::kImu;
+    else if (v == "free") o.registration_attitude = RegistrationAttitude::kFree;
+    else t->Fail("imu or free");
+  }
+  c.ReadPositive("imu_tilt_sigma_deg", o.imu_tilt_sigma_deg);
+  c.Read("check_placement", o.check_placement);
+  c.Read("placement_correction", o.placement_correction);
+  c.ReadPositive("min_brick_inliers", o.min_brick_inliers, 100000);
   return o;
 }
 
@@ -532,6 +542,82 @@ bool Mission::HoldWhileUnsafe(double direction, Seconds* held) {
   return true;
 }
 
+Mission::Sweep Mission::SweepWorkpiece(VisitLog& log, int sweep) {
+  Sweep out;
+  // Predict where the top of the workpiece is, and look at it along a diagonal of the brick
+  // so that its top and two side faces are seen.
+  const Pose3 T_site_base = Pose3Of(T_site_base_);
+  const SiteBox& top = workpiece_.bricks.back();
+  const Eigen::Vector3d p_top = top.T_site_box * Eigen::Vector3d(0, 0, 0.5 * top.box.size.z());
+  const Eigen::Vector2d to_robot = (T_site_base.translation() - p_top).head<2>().normalized();
+  const double brick_yaw = XyzRpyFromPose(top.T_site_box)[5];
+  double best = -2;
+  Eigen::Vector2d diagonal = to_robot;
+  for (int k = 0; k < 4; ++k) {
+    const double a = brick_yaw + kPi / 4 + k * kPi / 2 + (sweep % 2) * 0.15;  // vary between sweeps
+    const Eigen::Vector2d d(std::cos(a), std::sin(a));
+    if (d.dot(to_robot) > best) {
+      best = d.dot(to_robot);
+      diagonal = d;
+    }
+  }
+  const double el = DegToRad(o_.scan_elevation_deg);
+  const Eigen::Vector3d p_laser = p_top + o_.scan_distance * Eigen::Vector3d(std::cos(el) * diagonal.x(),
+                                                                           std::cos(el) * diagonal.y(), std::sin(el));
+  const Eigen::Vector3d look = (p_top - p_laser).normalized();
+  const Eigen::Vector3d x_tool = look.cross(Eigen::Vector3d::UnitZ()).normalized();  // scan plane vertical
+  Pose3 T_site_tool0 = Pose3::Identity();
+  T_site_tool0.linear().col(0) = x_tool;
+  T_site_tool0.linear().col(1) = look.cross(x_tool);
+  T_site_tool0.linear().col(2) = look;
+  // The laser, not the flange, is at p_laser: shift the flange back by the mount.
+  T_site_tool0.translation() = p_laser - T_site_tool0.linear() * c_.T_tool0_arm_laser.translation();
+  const Pose3 T_arm_base_tool0 =
+      (T_site_base * c_.robot.T_base_arm_base).inverse(Eigen::Isometry) * T_site_tool0;
+  const auto ik = arm_->ik().Solve(T_arm_base_tool0, q_);
+  if (!ik.ok()) {
+    log.failure = "scan pose out of reach: " + ik.message;
+    return out;
+  }
+  const double half = DegToRad(o_.sweep_half_angle_deg);
+  // To the scan pose (joint 1 turned to the sweep's start), then sweep joint 1 across it.
+  Vector6d q_start = ik.q;
+  q_start[0] -= half;
+  arm::PrimitiveResult sweep_steps = arm_->MoveToJoints(q_, q_start);
+  if (sweep_steps.ok)
+    sweep_steps.Append(arm_->SweepJoint(q_start, 0, q_start[0], ik.q[0] + half, DegToRad(o_.sweep_speed_deg_s)));
+  if (!sweep_steps.ok) {
+    log.failure = "sweep: " + sweep_steps.message;
+    return out;
+  }
+  arm_scans_.clear();
+  joint_states_.clear();
+  PumpSensors();
+  arm_scans_.clear();
+  joint_states_.clear();
+  robot_.SetLaserActive(DeviceId::kArmLaser, true);  // the arm laser works only for sweeps
+  const Seconds sweep_t0 = robot_.Now();
+  const bool sweep_ok = RunArm(sweep_steps, "scan sweep");
+  const Seconds sweep_t1 = robot_.Now();
+  robot_.SetLaserActive(DeviceId::kArmLaser, false);
+  if (!sweep_ok) {
+    out.status = SweepStatus::kStop;
+    return out;
+  }
+
+  // Eq. 6, then keep what lies near the workpiece (and the floor around it).
+  const std::vector<RayPoint> swept =
+      AssembleCloud(arm_scans_, joint_states_, c_.robot, c_.T_tool0_arm_laser, c_.assembly);
+  const Eigen::Vector3d p_stack_base = T_site_base.inverse(Eigen::Isometry) * p_top;
+  for (const RayPoint& p : swept)
+    if ((p.p - p_stack_base).head<2>().norm() < o_.crop_radius) out.cloud.push_back(p);
+  out.status = SweepStatus::kOk;
+  out.t0 = sweep_t0;
+  out.t1 = sweep_t1;
+  out.T_site_base = T_site_base;
+  return out;
+}
+
 bool Mission::Localize(VisitLog& log) {
   if (workpiece_.bricks.empty()) {  // nothing built yet: the start pose is all there is
     log.localized = false;
@@ -539,76 +625,25 @@ bool Mission::Localize(VisitLog& log) {
   }
   for (int sweep = 0; sweep < o_.max_sweeps; ++sweep) {
     Progress(fmt::format("{}: scanning the workpiece (sweep {})", log.position, sweep + 1));
-    // Predict where the top of the workpiece is, and look at it along a diagonal of the brick
-    // so that its top and two side faces are seen.
-    const Pose3 T_site_base = Pose3Of(T_site_base_);
-    const SiteBox& top = workpiece_.bricks.back();
-    const Eigen::Vector3d p_top = top.T_site_box * Eigen::Vector3d(0, 0, 0.5 * top.box.size.z());
-    const Eigen::Vector2d to_robot = (T_site_base.translation() - p_top).head<2>().normalized();
-    const double brick_yaw = XyzRpyFromPose(top.T_site_box)[5];
-    double best = -2;
-    Eigen::Vector2d diagonal = to_robot;
-    for (int k = 0; k < 4; ++k) {
-      const double a = brick_yaw + kPi / 4 + k * kPi / 2 + (sweep % 2) * 0.15;  // vary between sweeps
-      const Eigen::Vector2d d(std::cos(a), std::sin(a));
-      if (d.dot(to_robot) > best) {
-        best = d.dot(to_robot);
-        diagonal = d;
-      }
-    }
-    const double el = DegToRad(o_.scan_elevation_deg);
-    const Eigen::Vector3d p_laser = p_top + o_.scan_distance * Eigen::Vector3d(std::cos(el) * diagonal.x(),
-                                                                             std::cos(el) * diagonal.y(), std::sin(el));
-    const Eigen::Vector3d look = (p_top - p_laser).normalized();
-    const Eigen::Vector3d x_tool = look.cross(Eigen::Vector3d::UnitZ()).normalized();  // scan plane vertical
-    Pose3 T_site_tool0 = Pose3::Identity();
-    T_site_tool0.linear().col(0) = x_tool;
-    T_site_tool0.linear().col(1) = look.cross(x_tool);
-    T_site_tool0.linear().col(2) = look;
-    // The laser, not the flange, is at p_laser: shift the flange back by the mount.
-    T_site_tool0.translation() = p_laser - T_site_tool0.linear() * c_.T_tool0_arm_laser.translation();
-    const Pose3 T_arm_base_tool0 =
-        (T_site_base * c_.robot.T_base_arm_base).inverse(Eigen::Isometry) * T_site_tool0;
-    const auto ik = arm_->ik().Solve(T_arm_base_tool0, q_);
-    if (!ik.ok()) {
-      log.failure = "scan pose out of reach: " + ik.message;
-      continue;
-    }
-    const double half = DegToRad(o_.sweep_half_angle_deg);
-    // To the scan pose (joint 1 turned to the sweep's start), then sweep joint 1 across it.
-    Vector6d q_start = ik.q;
-    q_start[0] -= half;
-    arm::PrimitiveResult sweep_steps = arm_->MoveToJoints(q_, q_start);
-    if (sweep_steps.ok)
-      sweep_steps.Append(arm_->SweepJoint(q_start, 0, q_start[0], ik.q[0] + half, DegToRad(o_.sweep_speed_deg_s)));
-    if (!sweep_steps.ok) {
-      log.failure = "sweep: " + sweep_steps.message;
-      continue;
-    }
-    arm_scans_.clear();
-    joint_states_.clear();
-    PumpSensors();
-    arm_scans_.clear();
-    joint_states_.clear();
-    robot_.SetLaserActive(DeviceId::kArmLaser, true);  // the arm laser works only for sweeps
-    const Seconds sweep_t0 = robot_.Now();
-    const bool sweep_ok = RunArm(sweep_steps, "scan sweep");
-    const Seconds sweep_t1 = robot_.Now();
-    robot_.SetLaserActive(DeviceId::kArmLaser, false);
-    if (!sweep_ok) return false;
+    Sweep swept = SweepWorkpiece(log, sweep);
+    if (swept.status == SweepStatus::kStop) return false;
+    if (swept.status == SweepStatus::kRetry) continue;
     ++log.sweeps;
-
-    // Eq. 6, then keep what lies near the workpiece (and the floor around it).
-    const std::vector<RayPoint> swept =
-        AssembleCloud(arm_scans_, joint_states_, c_.robot, c_.T_tool0_arm_laser, c_.assembly);
-    const Eigen::Vector3d p_stack_base = T_site_base.inverse(Eigen::Isometry) * p_top;
-    log.cloud.clear();
-    for (const RayPoint& p : swept)
-      if ((p.p - p_stack_base).head<2>().norm() < o_.crop_radius) log.cloud.push_back(p);
+    log.cloud = std::move(swept.cloud);
+    const Pose3& T_site_base = swept.T_site_base;
+    const Seconds sweep_t0 = swept.t0, sweep_t1 = swept.t1;
     Site model = workpiece_;  // register against the workpiece (the stack as built) and the ground
     model.walls.clear();
     model.obstacles.clear();
-    SiteLocalization loc = LocalizeInSite(log.cloud, model, T_site_base, c_.registration, true);
+    // The base's up while it scanned (it stands still; the sweep turns only joint 1).
+    const std::optional<Eigen::Vector3d> up_scan = MeanUp(accel_, sweep_t0, sweep_t1);
+    Pose3 guess = T_site_base;
+    std::array<bool, 6> held{};
+    if (o_.registration_attitude == RegistrationAttitude::kImu && up_scan) {
+      guess = LevelledPose(T_site_base, *up_scan);
+      held[3] = held[4] = true;  // roll and pitch, about the base's x and y through the site origin
+    }
+    SiteLocalization loc = LocalizeInSite(log.cloud, model, guess, c_.registration, true, held);
     // The stack as built (measure_top): move the model's top brick to the height its top face is
     // seen at, and register again when that moved it by more than twice the measurement's error.
     std::optional<Pose3> top_before;
@@ -620,7 +655,7 @@ bool Mission::Localize(VisitLog& log) {
         top_before = top_brick.T_site_box;
         top_brick.T_site_box.translation().z() += c_.site.ground_z + m->height - designed_top;
         model.bricks = workpiece_.bricks;
-        loc = LocalizeInSite(log.cloud, model, loc.T_site_base, c_.registration, true);
+        loc = LocalizeInSite(log.cloud, model, loc.T_site_base, c_.registration, true, held);
         spdlog::debug("{}: top face {:.1f} mm above the floor ({:.2f} mm, {} / {} points); registered again",
                       log.position, 1e3 * m->height, 1e3 * m->std, m->points, m->floor_points);
       }
@@ -665,9 +700,11 @@ bool Mission::Localize(VisitLog& log) {
     T_site_base_ = localized;
     // The registered full pose and the IMU's up direction while it was scanned (the sweep turns
     // only joint 1 about the vertical: the arm's moment, and so the tilt, barely changes).
+    if (held[3])  // the held tilt is the IMU's: its uncertainty, not zero
+      loc.covariance = WithHeldTiltCovariance(workpiece->T_base_body, workpiece->covariance, DegToRad(o_.imu_tilt_sigma_deg));
     T_site_base_ref_ = FuseWithFloorPrior(loc.T_site_base, loc.covariance);
     log.T_site_base_registered = T_site_base_ref_;
-    up_ref_ = MeanUp(accel_, sweep_t0, sweep_t1);
+    up_ref_ = up_scan;
     // The registered pose holds from the scan on (the base stood still): reset at the last scan
     // the estimator has seen, so the next one follows it in time.
     estimator_->Reset(localized, last_scan_mid_, /*keep_references=*/true);
@@ -675,6 +712,70 @@ bool Mission::Localize(VisitLog& log) {
   }
   StopSafely(fmt::format("{}: no trusted localization after {} sweeps ({})", log.position, log.sweeps, log.failure));
   return false;
+}
+
+bool Mission::CheckPlacement(int k, VisitLog& log) {
+  Progress(fmt::format("{}: checking brick {}", log.position, k + 1));
+  const std::string failure_before = log.failure;
+  Sweep swept = SweepWorkpiece(log, 0);
+  if (swept.status == SweepStatus::kStop) return false;
+  if (swept.status == SweepStatus::kRetry) {
+    Note("check_skipped", fmt::format("{}: brick {} not checked ({})", log.position, k + 1, log.failure));
+    log.failure = failure_before;
+    return true;
+  }
+  // The new brick on its own (height and heading free, tilt as the stack's), the stack below as
+  // one body, the ground apart.
+  Site below = workpiece_;
+  below.walls.clear();
+  below.obstacles.clear();
+  const SiteBox placed = below.bricks.back();
+  below.bricks.pop_back();
+  Site alone = below;
+  alone.has_ground = false;
+  alone.bricks = {placed};
+  Pose3 guess = T_site_base_ref_;
+  const std::optional<Eigen::Vector3d> up = MeanUp(accel_, swept.t0, swept.t1);
+  std::array<bool, 6> held{};
+  if (o_.registration_attitude == RegistrationAttitude::kImu && up) {
+    guess = LevelledPose(guess, *up);
+    held[3] = held[4] = true;
+  }
+  std::vector<RegistrationBody> bodies = SiteBodies(below, guess, true);
+  for (auto& b : bodies)
+    if (b.name == "site") b.fixed = held;
+  RegistrationBody brick{"placed", guess.inverse(Eigen::Isometry), {}, true};
+  for (const RigidObject& o : alone.Objects())
+    if (o.name == placed.name) brick.parts.push_back(o);
+  brick.fixed = {false, false, false, true, true, false};  // it lies on the brick below
+  bodies.push_back(brick);
+  const RegistrationSummary reg = Register(swept.cloud, bodies, c_.registration);
+  const RegisteredBody* b = reg.Find("placed");
+  const RegisteredBody* stack = reg.Find("site");
+  std::string why;
+  if (!reg.IsUsable()) why = "registration failed";
+  else if (!b || b->inliers < o_.min_brick_inliers) why = fmt::format("{} points on the brick", b ? b->inliers : 0);
+  else if (!b->Constrained()) why = "unconstrained: " + b->unconstrained.front();
+  else if (stack && !stack->Constrained()) why = "stack unconstrained: " + stack->unconstrained.front();
+  if (!why.empty()) {
+    Note("check_skipped", fmt::format("{}: brick {} not measured ({})", log.position, k + 1, why));
+    return true;
+  }
+  // The brick relative to the stack below (both seen in this sweep: the sweep's systematic errors
+  // cancel); at the start, with no stack yet, relative to the start pose (the site's definition).
+  const Pose3 T_base_site = stack ? stack->T_base_body : guess.inverse(Eigen::Isometry);
+  const Pose3 T_site_brick = T_base_site.inverse(Eigen::Isometry) * b->T_base_body * placed.T_site_box;
+  const Eigen::Vector2d offset =
+      (T_site_brick.translation() - placed.T_site_box.translation()).head<2>() + correction_applied_;
+  placement_offsets_[log.position].push_back(offset);
+  log.placement_offset_mm = 1e3 * offset;
+  spdlog::debug("{}: brick {} measured {:.2f} / {:.2f} mm from its goal (correction {:.2f} / {:.2f} mm)", log.position,
+                k + 1, 1e3 * (offset.x() - correction_applied_.x()), 1e3 * (offset.y() - correction_applied_.y()),
+                1e3 * correction_applied_.x(), 1e3 * correction_applied_.y());
+  // The model holds the brick where it was measured, once the stack is there to measure it
+  // against (the first brick defines the site: it stays where it was meant to be).
+  if (stack) workpiece_.bricks.back().T_site_box = T_site_brick;
+  return true;
 }
 
 Pose3 Mission::FuseWithFloorPrior(const Pose3& T_site_base, const Matrix6d& covariance) const {
@@ -709,6 +810,19 @@ bool Mission::PlaceBrick(int k, VisitLog& log) {
     const SiteBox& top = workpiece_.bricks.back();
     T_site_goal.translation().z() =
         top.T_site_box.translation().z() + 0.5 * top.box.size.z() + 0.5 * c_.site.brick.size.z();
+  }
+  const Pose3 T_site_intended = T_site_goal;  // where the brick should land (the model's belief)
+  correction_applied_.setZero();
+  if (o_.placement_correction) {
+    // The mean of this stand's last offsets: postures change slowly as the stack grows (a round
+    // of four stands adds 0.2 m), so older offsets are let go.
+    const auto it = placement_offsets_.find(log.position);
+    if (it != placement_offsets_.end() && !it->second.empty()) {
+      const std::size_t n = std::min<std::size_t>(it->second.size(), 3);
+      for (std::size_t i = it->second.size() - n; i < it->second.size(); ++i) correction_applied_ += it->second[i];
+      correction_applied_ /= static_cast<double>(n);
+      T_site_goal.translation().head<2>() -= correction_applied_;
+    }
   }
   // A brick the vacuum loses (a failed grip, a drop on the way) is replaced by the feeder's next
   // one: pick again, up to pick_retries times.
@@ -751,7 +865,7 @@ bool Mission::PlaceBrick(int k, VisitLog& log) {
     Note("brick_lost", fmt::format("brick {}: the vacuum sensor reports no brick; picking the feeder's next one "
                                    "(retry {} of {})", k + 1, attempt + 1, o_.pick_retries));
   }
-  workpiece_.bricks.push_back({fmt::format("brick_{}", k), T_site_goal, c_.site.brick});
+  workpiece_.bricks.push_back({fmt::format("brick_{}", k), T_site_intended, c_.site.brick});
   log.bricks_placed.push_back(k);
   ++bricks_placed_;
   return true;
@@ -786,6 +900,7 @@ std::vector<VisitLog> Mission::Run(const BuildingPlan& plan) {
       log.desired = log.start_estimate = log.end_estimate = T_site_base_;
     }
     for (int b = 0; o_.place_bricks && b < visit.bricks && !stopped_; ++b) PlaceBrick(brick++, log);
+    if (o_.check_placement && !log.bricks_placed.empty() && !stopped_) CheckPlacement(log.bricks_placed.back(), log);
     log.t_end = robot_.Now();
     if (on_visit_end) on_visit_end(log);
     logs.push_back(std::move(log));

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "ifab/perception/registration.h"
+
 namespace ifab::sequencer {
 
 std::optional<Eigen::Vector3d> MeanUp(const std::vector<AccelSample>& samples, Seconds t0, Seconds t1,
@@ -32,6 +34,26 @@ Pose3 CompensateTilt(const Pose3& T_site_base_ref, const Eigen::Vector3d& up_ref
 
 double TiltAngle(const Eigen::Vector3d& up_a, const Eigen::Vector3d& up_b) {
   return std::acos(std::clamp(up_a.normalized().dot(up_b.normalized()), -1.0, 1.0));
+}
+
+Pose3 LevelledPose(const Pose3& T_site_base, const Eigen::Vector3d& up_base) {
+  const double heading = XyzRpyFromPose(T_site_base)[5];
+  Pose3 out = Pose3::Identity();
+  // R up_base = e_z; the smallest such tilt, then the heading about the vertical.
+  out.linear() = Eigen::AngleAxisd(heading, Eigen::Vector3d::UnitZ()).toRotationMatrix() *
+                 Eigen::Quaterniond::FromTwoVectors(up_base.normalized(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  out.translation() = T_site_base.translation();
+  return out;
+}
+
+Eigen::Matrix<double, 6, 6> WithHeldTiltCovariance(const Pose3& T_base_site, Eigen::Matrix<double, 6, 6> covariance,
+                                                   double tilt_sigma) {
+  for (int k : {3, 4}) {
+    covariance.row(k).setZero();
+    covariance.col(k).setZero();
+    covariance(k, k) = tilt_sigma * tilt_sigma;
+  }
+  return InverseCovariance(T_base_site, covariance);
 }
 
 }  // namespace ifab::sequencer

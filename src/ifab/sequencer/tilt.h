@@ -31,6 +31,17 @@ Eigen::Matrix3d TiltChange(const Eigen::Vector3d& up_ref, const Eigen::Vector3d&
 /// centroid of their contact area.
 Pose3 CompensateTilt(const Pose3& T_site_base_ref, const Eigen::Vector3d& up_ref, const Eigen::Vector3d& up_now);
 
+/// The planar pose `T_site_base` (x, y, heading; its height kept) tilted so that the base's
+/// measured up direction `up_base` (base frame) maps to the site's vertical: the site is plumb
+/// (a designed stack stands vertical), so gravity gives the base's absolute roll and pitch.
+Pose3 LevelledPose(const Pose3& T_site_base, const Eigen::Vector3d& up_base);
+
+/// Covariance of T_site_base ([x y z rx ry rz] as in perception/registration.h) from a
+/// registration that held the workpiece's roll and pitch (base axes, through its origin) at the
+/// IMU's: the held directions get the IMU's tilt variance `tilt_sigma`^2 [rad^2] instead of zero.
+Eigen::Matrix<double, 6, 6> WithHeldTiltCovariance(const Pose3& T_base_site, Eigen::Matrix<double, 6, 6> covariance,
+                                                   double tilt_sigma);
+
 /// Angle between two up directions [rad].
 double TiltAngle(const Eigen::Vector3d& up_a, const Eigen::Vector3d& up_b);
 

@@ -27,7 +27,7 @@ double ClippedNormal(RandomStream& rng, double sigma, double limit) {
 }  // namespace
 
 AsBuiltTolerances AsBuiltTolerances::FromConfig(const ConfigNode& root) {
-  root.ExpectKeys({"bricks", "floor", "base", "arm", "lasers", "gripper", "calibration_cube"});
+  root.ExpectKeys({"bricks", "floor", "base", "arm", "lasers", "imu", "gripper", "calibration_cube"});
   AsBuiltTolerances t;
   {
     const ConfigNode b = root["bricks"];
@@ -85,6 +85,11 @@ AsBuiltTolerances AsBuiltTolerances::FromConfig(const ConfigNode& root) {
     t.laser = LrfUnitTolerances::FromConfig(l);
     l.ReadNonNegative("mount_sigma_m", t.mount_sigma_m);
     l.ReadNonNegative("mount_sigma_deg", t.mount_sigma_deg);
+  }
+  {
+    const ConfigNode i = root["imu"];
+    i.ExpectKeys({"mount_sigma_deg"});
+    i.ReadNonNegative("mount_sigma_deg", t.imu_mount_sigma_deg);
   }
   {
     const ConfigNode g = root["gripper"];
@@ -209,6 +214,15 @@ AsBuilt DrawAsBuilt(const AsBuiltTolerances& t, const RobotModel& design_robot, 
       for (int k = 0; k < 3; ++k) (*m)[static_cast<std::size_t>(k)] = rng.Normal(t.mount_sigma_m);
       for (int k = 3; k < 6; ++k) (*m)[static_cast<std::size_t>(k)] = DegToRad(rng.Normal(t.mount_sigma_deg));
     }
+  }
+
+  // The IMU as mounted (its own stream: the other draws stay as they were).
+  {
+    RandomStream rng = root.Derive("imu");
+    const double roll = DegToRad(rng.Normal(t.imu_mount_sigma_deg));
+    const double pitch = DegToRad(rng.Normal(t.imu_mount_sigma_deg));
+    const double yaw = DegToRad(rng.Normal(t.imu_mount_sigma_deg));
+    a.imu_mount_error_rpy = {roll, pitch, yaw};
   }
 
   // The calibration cube as machined: each edge its own, within its general tolerance.

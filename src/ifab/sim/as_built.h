@@ -55,6 +55,8 @@ struct AsBuiltTolerances {
   LrfUnitTolerances laser;
   double mount_sigma_m{0.003};
   double mount_sigma_deg{0.3};
+  // The IMU on the chassis: its sensor frame against the base frame.
+  double imu_mount_sigma_deg{0.07};
   // Gripper.
   double release_sigma_xy_m{0.0003};
   double release_sigma_per_lean_deg_m{0.001};
@@ -90,6 +92,7 @@ struct AsBuilt {
   // Lasers (each unit its own options: bias curve, noise, warm-up) and mounts.
   LrfOptions base_laser, arm_laser;
   std::array<double, 6> base_laser_mount_error{}, arm_laser_mount_error{};
+  Eigen::Vector3d imu_mount_error_rpy{Eigen::Vector3d::Zero()};  ///< [rad] sensor frame = base frame turned by this
   // Gripper.
   double release_sigma_xy{0.0}, release_sigma_per_lean{0.0}, release_sigma_yaw{0.0};
   // The calibration cube: its edges' deviation from the drawing's size (x, y, z of its box).

@@ -126,6 +126,10 @@ SimRobot::SimRobot(const SimOptions& options, Pose2 T_site_base0, Vector6d q0, s
   T_tool0_arm_laser_true_ =
       robot_.T_tool0_arm_laser * PoseFromXyzRpy(a.exact ? options.arm_laser_mount_error : a.arm_laser_mount_error);
   if (!a.exact) servo_.set_offsets(a.joint_offsets);
+  if (!a.exact) {
+    const Eigen::Vector3d& e = a.imu_mount_error_rpy;
+    R_imu_base_ = PoseFromXyzRpy(0, 0, 0, e[0], e[1], e[2]).linear().transpose();
+  }
   if (!a.exact) seat_ = {seat_rng_.Normal(a.base_seat_sigma), seat_rng_.Normal(a.base_seat_sigma)};
   T_site_base_ = TrueSiteBase(base_.pose(), servo_.q_physical());
   base_scan_start_ = arm_scan_start_ = Now3();
@@ -260,7 +264,8 @@ void SimRobot::Step() {
     v_prev_ = base_.v();
     AccelSample a;
     a.stamp = g.stamp;
-    a.specific_force = accel_.Measure(a_base + T_site_base_.linear().transpose() * Eigen::Vector3d(0, 0, 9.80665));
+    // In the IMU's own axes (its mount on the chassis; the design has it along the base's).
+    a.specific_force = accel_.Measure(R_imu_base_ * (a_base + T_site_base_.linear().transpose() * Eigen::Vector3d(0, 0, 9.80665)));
     accel_samples_.push_back(a);
   }
 

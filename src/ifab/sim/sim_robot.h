@@ -123,6 +123,7 @@ class SimRobot final : public hal::Robot {
   ArmServo servo_;
   Gyro gyro_;
   Accelerometer accel_;
+  Eigen::Matrix3d R_imu_base_{Eigen::Matrix3d::Identity()};  ///< the IMU's mount (as built)
   LrfModel base_lrf_, arm_lrf_;
   DeviceClock base_laser_clock_, arm_laser_clock_, gyro_clock_, arm_clock_;
   RandomStream base_lrf_rng_, arm_lrf_rng_, gripper_rng_;

@@ -67,6 +67,41 @@ TEST(Tilt, CompensationRemovesACommandedTiltChange) {
   EXPECT_LT(worst_compensated, 0.6e-3);
 }
 
+TEST(Tilt, LevelledPoseTakesRollAndPitchFromGravityAndKeepsThePlanarPose) {
+  RandomStream rng(21);
+  double worst_deg = 0.0;
+  for (int trial = 0; trial < 50; ++trial) {
+    const Pose3 T_true = PoseFromXyzRpy(rng.Uniform(-2, 2), rng.Uniform(-2, 2), rng.Normal(0.003),
+                                        DegToRad(rng.Normal(0.3)), DegToRad(rng.Normal(0.3)), rng.Uniform(-kPi, kPi));
+    const Eigen::Vector3d bias = 9.80665e-3 * Eigen::Vector3d(rng.Normal(0.5), rng.Normal(0.5), rng.Normal(0.5));
+    const auto up = MeanUp(Samples(T_true.linear(), bias, 0.0, rng), 0.0, 2.0);
+    ASSERT_TRUE(up);
+    // The planar estimate: x, y, heading right, roll and pitch unknown (zero).
+    const auto v = XyzRpyFromPose(T_true);
+    const Pose3 planar = PoseFromXyzRpy(v[0], v[1], v[2], 0.0, 0.0, v[5]);
+    const Pose3 levelled = LevelledPose(planar, *up);
+    EXPECT_LT((levelled.translation() - T_true.translation()).norm(), 1e-12);
+    // The base's vertical axis as the truth has it, to within the accelerometer's bias.
+    const double tilt_error = TiltAngle(levelled.linear().col(2), T_true.linear().col(2));
+    worst_deg = std::max(worst_deg, RadToDeg(tilt_error));
+    // The heading is the planar one (up to the tilt's second-order effect).
+    EXPECT_NEAR(XyzRpyFromPose(levelled)[5], v[5], DegToRad(0.01));
+  }
+  EXPECT_LT(worst_deg, 0.12);  // 0.5 mg per axis: 0.03 deg a typical draw
+}
+
+TEST(Tilt, HeldTiltCovarianceCarriesTheImuVariance) {
+  Eigen::Matrix<double, 6, 6> cov = Eigen::Matrix<double, 6, 6>::Identity() * 1e-8;
+  cov(3, 3) = cov(4, 4) = 0.0;  // held: the registration reports nothing there
+  const Pose3 T_base_site = PoseFromXyzRpy(1.9, 0.3, -0.05, 0, 0, 0.4);
+  const auto out = WithHeldTiltCovariance(T_base_site, cov, DegToRad(0.05));
+  // The base's roll and pitch in the site carry the IMU's variance (rotated), its yaw the registration's.
+  EXPECT_NEAR(out(3, 3) + out(4, 4), 2 * std::pow(DegToRad(0.05), 2), 1e-12);
+  EXPECT_NEAR(out(5, 5), 1e-8, 1e-12);
+  // The tilt about the site origin, 1.9 m away, moves the base's origin: its height varies.
+  EXPECT_GT(out(2, 2), 1e-8 + 0.5 * std::pow(1.9 * DegToRad(0.05), 2));
+}
+
 TEST(Tilt, NoSamplesNoTilt) {
   std::vector<AccelSample> none;
   EXPECT_FALSE(MeanUp(none, 0.0, 1.0).has_value());
