@@ -22,6 +22,8 @@ void AddRunCommand(CLI::App& app, int& exit_code) {
   sub->add_option("--runs", options->runs, "Number of seeded runs")->check(CLI::PositiveNumber);
   sub->add_option("--jobs", options->jobs, "Runs in parallel")->check(CLI::PositiveNumber);
   sub->add_option("--out", options->out_dir, "Output folder (default: runs/NAME)");
+  sub->add_option("--set", options->settings,
+                  "KEY=VALUE over the config, dotted keys (repeatable), e.g. --set mission.tilt_compensation=none");
   sub->add_flag("--force", options->force, "Overwrite the output folder if it already holds a run");
   sub->add_flag("!--quiet", options->progress, "No progress or table on the terminal");
   sub->callback([options, &exit_code] {

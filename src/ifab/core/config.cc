@@ -65,6 +65,46 @@ ConfigNode ConfigNode::Overlay(const ConfigNode& overlay) const {
                     parent_line_);
 }
 
+ConfigNode ConfigNode::WithSettings(const std::vector<std::string>& settings) const {
+  YAML::Node root = YAML::Clone(node_);
+  for (const std::string& s : settings) {
+    const auto eq = s.find('=');
+    if (eq == std::string::npos || eq == 0 || s.front() == '.' || s[eq - 1] == '.')
+      ThrowInputError("--set '{}': expected KEY=VALUE, e.g. mission.tilt_compensation=none", s);
+    std::vector<std::string> keys;
+    for (std::size_t b = 0; b < eq;) {
+      const std::size_t dot = std::min(s.find('.', b), eq);
+      if (dot == b) ThrowInputError("--set '{}': an empty key between dots", s);
+      keys.push_back(s.substr(b, dot - b));
+      b = dot + 1;
+    }
+    YAML::Node value;
+    try {
+      value = YAML::Load(s.substr(eq + 1));
+    } catch (const YAML::Exception& e) {
+      ThrowInputError("--set '{}': the value is not valid YAML: {}", s, e.msg);
+    }
+    // Walk down by copies of the handles (assigning to a YAML::Node handle would rebind it).
+    std::vector<YAML::Node> chain{root};
+    for (std::size_t k = 0; k + 1 < keys.size(); ++k) {
+      YAML::Node parent = chain.back();
+      if (parent.IsDefined() && !parent.IsMap() && !parent.IsNull())
+        ThrowInputError("--set '{}': '{}' is not a section (a map) in {}", s, keys[k], *file_);
+      chain.push_back(parent[keys[k]]);
+    }
+    if (chain.back().IsDefined() && !chain.back().IsMap() && !chain.back().IsNull())
+      ThrowInputError("--set '{}': the key's parent is not a section (a map) in {}", s, *file_);
+    chain.back()[keys.back()] = value;
+  }
+  return ConfigNode(root, file_, path_, parent_line_);
+}
+
+std::string ConfigNode::Dump() const {
+  YAML::Emitter out;
+  out << node_;
+  return out.c_str();
+}
+
 int ConfigNode::Line() const {
   if (node_ && !node_.Mark().is_null()) return node_.Mark().line + 1;
   return parent_line_;

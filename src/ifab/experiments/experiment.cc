@@ -106,7 +106,7 @@ nlohmann::json RunExperiment(const RunOptions& options) {
   const std::string config_path = options.config_path.empty()
                                       ? DataPath("experiments/" + options.experiment + ".yaml")
                                       : options.config_path;
-  const ConfigNode config = ConfigNode::LoadFile(config_path);
+  const ConfigNode config = ConfigNode::LoadFile(config_path).WithSettings(options.settings);
   const std::uint64_t seed = options.seed ? *options.seed : config.Get<std::uint64_t>("seed", 1);
 
   const fs::path out = options.out_dir.empty() ? fs::path("runs") / options.experiment
@@ -123,7 +123,15 @@ nlohmann::json RunExperiment(const RunOptions& options) {
   // Keep the config that produced the results beside them (never over the user's own file).
   const fs::path config_copy = out / "config.yaml";
   if (fs::absolute(config_copy) != fs::absolute(config_path)) {
-    fs::copy_file(config_path, config_copy, fs::copy_options::overwrite_existing, ec);
+    if (options.settings.empty()) {
+      fs::copy_file(config_path, config_copy, fs::copy_options::overwrite_existing, ec);
+    } else {  // what ran: the file with the settings applied (its paths relative to the original)
+      AtomicOfstream copy(config_copy);
+      copy << "# " << config_path << " with --set";
+      for (const auto& s : options.settings) copy << " " << s;
+      copy << "\n" << config.Dump() << "\n";
+      copy.Commit();
+    }
   }
 
   const SigintScope sigint;

@@ -62,6 +62,7 @@ struct RunOptions {
   std::string out_dir;                 ///< default: runs/<experiment>
   bool force{false};                   ///< overwrite a folder that already holds a run
   bool progress{true};
+  std::vector<std::string> settings;   ///< --set KEY=VALUE over the config (dotted keys)
 };
 
 /// Run an experiment: N seeded runs (in parallel with jobs > 1), results.json in out_dir
