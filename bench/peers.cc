@@ -86,6 +86,7 @@ void Add(const std::string& work, const std::string& figure, double ours, const 
 struct Sweep {
   std::vector<RegistrationBody> truth, guess;  // "ground", "site" (the stack as built)
   std::vector<RayPoint> cloud;
+  std::vector<RayPoint> full;  // the whole sweep, before the crop
   Eigen::Vector3d p_stack_base;
 };
 
@@ -152,12 +153,58 @@ std::vector<Sweep> MakeSweeps(int count) {
     s.p_stack_base = T_base_site * p_top;
     for (const RayPoint& p : swept)
       if ((p.p - s.p_stack_base).head<2>().norm() < 0.6) s.cloud.push_back(p);  // the mission's crop
+    s.full = swept;
     out.push_back(std::move(s));
   }
   return out;
 }
 
 const RegistrationBody& Stack(const std::vector<RegistrationBody>& bodies) { return bodies[1]; }
+
+// Does ifab leave information of the sweep unused? The same sweeps registered with each rule
+// that drops or down-weights points switched off, and with the whole sweep instead of the
+// mission's crop: if one of them lowered the error (and the error its covariance predicts), the
+// default would be below the sweep's information limit. Printed as its own table.
+void RegistrationInformationRows(int count) {
+  const std::vector<Sweep> sweeps = MakeSweeps(count);
+  const RegistrationOptions base =
+      RegistrationOptions::FromConfig(ConfigNode::LoadFile(IFAB_DATA_DIR "/perception/perception.yaml")["registration"]);
+  struct Variant {
+    std::string name;
+    RegistrationOptions options;
+    bool full{false};
+  };
+  std::vector<Variant> variants{{"default (perception.yaml, the mission's 0.6 m crop)", base, false}};
+  variants.push_back({"no shadow-point rule", base, false});
+  variants.back().options.shadow_points = false;
+  variants.push_back({"no robust loss (every point at full weight)", base, false});
+  variants.back().options.loss = RobustLoss::kNone;
+  variants.push_back({"max_distance 0.5 m (instead of 0.15)", base, false});
+  variants.back().options.max_distance = 0.5;
+  variants.push_back({"the whole sweep (no crop)", base, true});
+  std::puts("| ifab variant | points / inliers (median) | error median / worst [mm] | predicted median [mm] | error / predicted (median) | time median [ms] |");
+  std::puts("|---|---|---|---|---|---|");
+  for (const Variant& v : variants) {
+    std::vector<double> mm, predicted, ratio, ms, points, inliers;
+    for (const Sweep& s : sweeps) {
+      const auto& cloud = v.full ? s.full : s.cloud;
+      const double t0 = Clock::now();
+      const RegistrationSummary r = Register(cloud, s.guess, v.options);
+      ms.push_back(1e3 * Since(t0));
+      const Pose3& est = r.IsUsable() ? r.bodies[1].T_base_body : Stack(s.guess).T_base_body;
+      mm.push_back(1e3 * TranslationDistance(est, Stack(s.truth).T_base_body));
+      points.push_back(r.num_points);
+      inliers.push_back(r.num_inliers);
+      if (r.IsUsable()) {
+        predicted.push_back(1e3 * std::sqrt(r.bodies[1].covariance.topLeftCorner<3, 3>().trace()));
+        ratio.push_back(mm.back() / predicted.back());
+      }
+    }
+    std::printf("| %s | %.0f / %.0f | %.2f / %.2f | %.2f | %.2f | %.0f |\n", v.name.c_str(), Quantile(points, 0.5),
+                Quantile(inliers, 0.5), Quantile(mm, 0.5), Worst(mm), Quantile(predicted, 0.5), Quantile(ratio, 0.5),
+                Quantile(ms, 0.5));
+  }
+}
 
 void RegistrationRows(int count) {
   namespace reg = open3d::pipelines::registration;
@@ -417,14 +464,16 @@ int main(int argc, char** argv) {
       else if (a == "--dynamics-samples") samples = std::stoi(value("--dynamics-samples"));
       else if (a == "--only") {
         only = value("--only");
-        if (only != "registration" && only != "planning" && only != "dynamics") {
-          std::fprintf(stderr, "peers: --only: expected registration, planning or dynamics, got '%s'\n", only.c_str());
+        if (only != "registration" && only != "planning" && only != "dynamics" && only != "registration-information") {
+          std::fprintf(stderr, "peers: --only: expected registration, planning, dynamics or registration-information, got '%s'\n", only.c_str());
           return 2;
         }
       }
       else if (a == "-h" || a == "--help") {
         std::puts("peers [--sweeps N (24)] [--ompl-time-limit S (1.0)] [--dynamics-samples N (20000)]\n"
-                  "      [--only registration|planning|dynamics]\n"
+                  "      [--only registration|planning|dynamics|registration-information]\n"
+                  "(registration-information: ifab alone on the same sweeps, with each rule that drops or\n"
+                  " down-weights points switched off, and on the whole sweep; not part of the default run)\n"
                   "ifab beside Open3D (registration), OMPL (base planning) and KDL (dynamics) on the same inputs.");
         return 0;
       } else {
@@ -442,6 +491,10 @@ int main(int argc, char** argv) {
   }
   setenv("OMP_NUM_THREADS", "1", 1);
   using namespace ifab;
+  if (only == "registration-information") {
+    RegistrationInformationRows(sweeps);
+    return 0;
+  }
   if (only.empty() || only == "registration") {
     std::fprintf(stderr, "peers: registration of %d sweeps...\n", sweeps);
     RegistrationRows(sweeps);

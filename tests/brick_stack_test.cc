@@ -74,10 +74,12 @@ TEST(BrickStack, ShortVariantPlacesEveryBrickNearItsDesignedPose) {
   for (const char* f : {"brick_errors.csv", "trajectory_planned.csv", "trajectory_estimated.csv",
                         "trajectory_true.csv", "visits.csv", "results.json"})
     EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(o.out_dir) / f)) << f;
-  // Within noise of the old figures: the calibration is bit for bit the old one (it runs before
-  // anything changed), the placed bricks within a millimetre.
+  // Within noise of the old figures: the calibration is pinned (it runs before the mission, so
+  // a change there shows here first), the placed bricks within a millimetre. Pinned value since
+  // the lasers draw their per-beam noise by the ziggurat (issue 15): 3.648 mm; 3.724 mm with the
+  // polar method's draws before (the same distribution, another realisation of it).
   EXPECT_EQ(r["as_built"]["world"].get<std::string>(), "exact");
-  EXPECT_NEAR(r["arm_laser_mount"]["error_vs_true_mm"][0].get<double>(), 3.724, 0.01);
+  EXPECT_NEAR(r["arm_laser_mount"]["error_vs_true_mm"][0].get<double>(), 3.648, 0.01);
   EXPECT_NEAR(r["brick_error_long_mm_mean"].get<double>(), 0.60, 1.0);
   EXPECT_NEAR(r["brick_error_short_mm_mean"].get<double>(), 0.63, 1.0);
   EXPECT_LE(r["brick_error_mm_max"].get<double>(), 1.66 + 1.5);

@@ -57,9 +57,12 @@ struct LrfOptions {
   double AngleIncrement() const;
   double TimeIncrement() const { return scan_period * sweep_fraction / (beams - 1); }
   /// Range bias at range r and incidence angle (0 = normal) [m], positive = reads long.
-  double Bias(double range, double incidence) const;
+  double Bias(double range, double incidence) const { return BiasAtCos(range, std::cos(incidence)); }
   /// Range noise's sigma at range r and incidence [m].
-  double SigmaAlong(double range, double incidence) const;
+  double SigmaAlong(double range, double incidence) const { return SigmaAlongAtCos(range, std::cos(incidence)); }
+  /// The same two given cos(incidence) (what a beam has: no acos and cos per beam).
+  double BiasAtCos(double range, double cos_incidence) const;
+  double SigmaAlongAtCos(double range, double cos_incidence) const;
 };
 
 /// How UTM-30LX units differ from the nominal model (data/sim/as_built.yaml `lasers:`).
@@ -89,7 +92,8 @@ struct BeamSample {
 
 class LrfModel {
  public:
-  explicit LrfModel(LrfOptions options) : options_(std::move(options)) {}
+  explicit LrfModel(LrfOptions options)
+      : options_(std::move(options)), cos_max_incidence_(std::cos(options_.max_incidence_deg * EIGEN_PI / 180.0)) {}
   const LrfOptions& options() const { return options_; }
   /// The unit has been on for t seconds: its warm-up drift now.
   void SetTimeSincePowerOn(double t) {
@@ -178,6 +182,7 @@ class LrfModel {
                      bool near_edge, RandomStream& rng) const;
 
   LrfOptions options_;
+  double cos_max_incidence_;  // cos(max_incidence_deg): no return below it
   double drift_{0.0};  // [m] warm-up drift added to every range
   mutable std::vector<Ray> rays_;  // scratch of Scan(); an LrfModel is not shared across threads
   mutable std::vector<Eigen::Vector2d> beam_cos_sin_;  // per beam, for the angles below

@@ -81,7 +81,7 @@ double Association::Associate(const KeyframeMap& map, const Pose2& T_world_base,
     for (const KeyframeFrame& f : kf_frames_) {
       const Eigen::Vector2d q_kf = f.R_kf_base * meas_base[i] + f.t_kf_base;
       RadiusKnnResultSet result(o_.neighbors_per_reference, r2, knn_index_.data(), knn_dist_.data());
-      f.level->tree->findNeighbors(result, q_kf.data(), nanoflann::SearchParams());
+      f.level->grid.RadiusSearch(q_kf, radius, result);
       const ReferencePoints& ref = f.level->ref;
       // Nearest to the end of a reference chain: the kernel sum there is one-sided and would
       // pull the point along the surface towards the reference's pose. Skip this reference.

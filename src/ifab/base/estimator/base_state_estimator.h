@@ -23,7 +23,7 @@
 /// The pose is T_world_base where "world" is whatever frame Reset() was given (the site, on
 /// the robot). No allocation per scan in the steady state: buffers are sized at construction
 /// (from Options::max_beams) and reused (a test counts allocations); adding a keyframe builds
-/// that keyframe's kd-tree (nanoflann's node pool allocates), once per keyframe.
+/// that keyframe's neighbour grid (point_grid.h; it allocates only to grow), once per keyframe.
 ///
 /// The parts, one file each with its own tests (KISS-ICP style): scan_preprocessing.h (range
 /// filter, deskew, thinning, reference sampling), keyframe_map.h (the reference set),

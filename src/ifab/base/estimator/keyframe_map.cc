@@ -36,11 +36,6 @@ KeyframeMap::KeyframeMap(const EstimatorOptions& options) : o_(options), num_lev
       level.ref.normals.reserve(beams);
       level.ref.near_end.reserve(beams);
       level.ref.weight.reserve(beams);
-      level.cloud.points = &level.ref.points;
-      level.tree = std::make_unique<KdTree>(
-          2, level.cloud,
-          nanoflann::KDTreeSingleIndexAdaptorParams(
-              10, nanoflann::KDTreeSingleIndexAdaptorFlags::SkipInitialBuildIndex));
     }
     keyframes_.push_back(std::move(kf));
   }
@@ -111,7 +106,8 @@ void KeyframeMap::Add(const Pose2& T_world_base, Seconds t, ScanPreprocessor* po
         level.ref.normals.clear();
       }
     }
-    level.tree->buildIndex();
+    // Cells of the level's search radius (Eq3Solver's): a query then visits about 3 x 3 cells.
+    level.grid.Build(level.ref.points, o_.search_radius_sigmas * std::sqrt(2.0) * LevelSigma(o_, l));
   }
 }
 

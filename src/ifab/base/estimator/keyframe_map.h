@@ -1,20 +1,20 @@
 #pragma once
 /// \file
 /// The reference set of eq. 1: keyframes (earlier scans, sampled as reference points with a
-/// kd-tree each, one resolution per sigma level) spaced in distance and angle and kept over a
+/// neighbour grid each, one resolution per sigma level) spaced in distance and angle and kept over a
 /// receding time horizon. With Options::keyframe_capacity above num_reference_scans it is a
 /// keyframe map: each scan is matched against the num_reference_scans keyframes nearest to its
 /// predicted pose, and revisiting a place reuses them. Slots are allocated once; adding a
-/// keyframe builds its kd-trees (nanoflann's node pool allocates), once per keyframe.
+/// keyframe builds its grids (which keep their buffers).
 
 #include <Eigen/Core>
 #include <cstdint>
 #include <memory>
-#include <nanoflann.hpp>
 #include <utility>
 #include <vector>
 
 #include "ifab/base/estimator/estimator_options.h"
+#include "ifab/base/estimator/point_grid.h"
 #include "ifab/base/estimator/scan_preprocessing.h"
 #include "ifab/core/se2.h"
 #include "ifab/core/time.h"
@@ -32,25 +32,10 @@ double MeasurementSpacing(const EstimatorOptions& o, int level);
 /// Number of sigma levels (coarse_sigmas + 1).
 int NumLevels(const EstimatorOptions& o);
 
-/// nanoflann adaptor over a vector of 2D points (not owned).
-struct PointSet {
-  const std::vector<Eigen::Vector2d>* points{nullptr};
-  std::size_t kdtree_get_point_count() const { return points->size(); }
-  double kdtree_get_pt(std::size_t i, std::size_t d) const { return (*points)[i][static_cast<int>(d)]; }
-  template <class BBox>
-  bool kdtree_get_bbox(BBox& /*bb*/) const {
-    return false;
-  }
-};
-
-using KdTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, PointSet>,
-                                                   PointSet, 2, std::uint32_t>;
-
 /// One resolution of a keyframe's points (one per sigma level, coarse levels sparser).
 struct ReferenceLevel {
   ReferencePoints ref;  ///< in the keyframe's base frame
-  PointSet cloud;       ///< over ref.points
-  std::unique_ptr<KdTree> tree;
+  PointGrid grid;       ///< over ref.points, cells of the level's search radius
 };
 
 struct Keyframe {
