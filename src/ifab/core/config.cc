@@ -65,8 +65,8 @@ ConfigNode ConfigNode::Overlay(const ConfigNode& overlay) const {
                     parent_line_);
 }
 
-ConfigNode ConfigNode::WithSettings(const std::vector<std::string>& settings) const {
-  YAML::Node root = YAML::Clone(node_);
+void ConfigNode::ApplySettings(const std::vector<std::string>& settings) {
+  YAML::Node root = node_;  // a handle: changes go to this config (a clone would lose the line marks)
   for (const std::string& s : settings) {
     const auto eq = s.find('=');
     if (eq == std::string::npos || eq == 0 || s.front() == '.' || s[eq - 1] == '.')
@@ -96,7 +96,6 @@ ConfigNode ConfigNode::WithSettings(const std::vector<std::string>& settings) co
       ThrowInputError("--set '{}': the key's parent is not a section (a map) in {}", s, *file_);
     chain.back()[keys.back()] = value;
   }
-  return ConfigNode(root, file_, path_, parent_line_);
 }
 
 std::string ConfigNode::Dump() const {

@@ -32,10 +32,11 @@ class ConfigNode {
   /// the overlay replaces what is here. A partial user config thus changes only the keys it names
   /// on top of the shipped defaults. Messages name the overlay's file.
   ConfigNode Overlay(const ConfigNode& overlay) const;
-  /// This config with `settings` ("a.b.c=VALUE", VALUE read as YAML: `mission.tilt_compensation=none`)
-  /// applied in order; the file stays the one read (relative paths keep their folder). Throws
-  /// InputError naming the setting that is not KEY=VALUE or whose path runs through a non-map.
-  ConfigNode WithSettings(const std::vector<std::string>& settings) const;
+  /// Apply `settings` ("a.b.c=VALUE", VALUE read as YAML: `mission.tilt_compensation=none`) in
+  /// order, in place (nodes copied from this one see them; the rest keeps its file and line
+  /// numbers, and relative paths their folder). Throws InputError naming the setting that is not
+  /// KEY=VALUE or whose path runs through a non-map.
+  void ApplySettings(const std::vector<std::string>& settings);
   /// The YAML text of this node.
   std::string Dump() const;
 

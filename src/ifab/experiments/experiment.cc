@@ -106,7 +106,8 @@ nlohmann::json RunExperiment(const RunOptions& options) {
   const std::string config_path = options.config_path.empty()
                                       ? DataPath("experiments/" + options.experiment + ".yaml")
                                       : options.config_path;
-  const ConfigNode config = ConfigNode::LoadFile(config_path).WithSettings(options.settings);
+  ConfigNode config = ConfigNode::LoadFile(config_path);
+  config.ApplySettings(options.settings);
   const std::uint64_t seed = options.seed ? *options.seed : config.Get<std::uint64_t>("seed", 1);
 
   const fs::path out = options.out_dir.empty() ? fs::path("runs") / options.experiment

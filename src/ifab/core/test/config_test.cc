@@ -68,16 +68,18 @@ TEST(ConfigNode, OverlayChangesOnlyTheKeysItNames) {
 
 TEST(ConfigNode, SettingsChangeDottedKeysAndKeepTheFile) {
   const ConfigNode c = ConfigNode::FromString("mission: {tilt_compensation: imu, max_sweeps: 3}\nworld: as-built\n", "exp.yaml");
-  const ConfigNode s = c.WithSettings({"mission.tilt_compensation=none", "world=exact", "new.section.key=[1, 2]"});
+  ConfigNode s = ConfigNode::FromString("mission: {tilt_compensation: imu, max_sweeps: 3}\nworld: as-built\n", "exp.yaml");
+  s.ApplySettings({"mission.tilt_compensation=none", "world=exact", "new.section.key=[1, 2]"});
   EXPECT_EQ(s["mission"].Get<std::string>("tilt_compensation"), "none");
   EXPECT_EQ(s["mission"].Get<int>("max_sweeps"), 3);
   EXPECT_EQ(s.Get<std::string>("world"), "exact");
   EXPECT_EQ(s["new"]["section"]["key"].AsNumbers(2)[1], 2.0);
-  EXPECT_EQ(c.Get<std::string>("world"), "as-built");  // the original is not changed
-  EXPECT_THAT(s["mission"].Where(), HasSubstr("exp.yaml"));
-  EXPECT_THAT(ErrorOf([&] { c.WithSettings({"mission.tilt_compensation"}); }), HasSubstr("expected KEY=VALUE"));
-  EXPECT_THAT(ErrorOf([&] { c.WithSettings({"world.x=1"}); }), HasSubstr("not a section"));
-  EXPECT_THAT(ErrorOf([&] { c.WithSettings({"mission..x=1"}); }), HasSubstr("empty key"));
+  // Untouched keys keep their file and line for messages.
+  EXPECT_THAT(s["mission"].Where(), HasSubstr("exp.yaml:1"));
+  ConfigNode bad = c;
+  EXPECT_THAT(ErrorOf([&] { bad.ApplySettings({"mission.tilt_compensation"}); }), HasSubstr("expected KEY=VALUE"));
+  EXPECT_THAT(ErrorOf([&] { bad.ApplySettings({"world.x=1"}); }), HasSubstr("not a section"));
+  EXPECT_THAT(ErrorOf([&] { bad.ApplySettings({"mission..x=1"}); }), HasSubstr("empty key"));
 }
 
 }  // namespace
