@@ -4,12 +4,15 @@ BUILD_DIR ?= build
 JOBS      ?= 2
 CMAKE_ARGS ?=
 RUN_ARGS  ?=
-# test-sanitize and fuzz share one instrumented build (Debian's clang, build-sanitize/, no
-# benchmarks): everything compiled with AddressSanitizer + UndefinedBehaviorSanitizer and
-# libFuzzer's coverage (IFAB_FUZZ). The whole ctest suite runs there under the sanitizers, and the
-# harnesses of tests/fuzz/ fuzz guided by the coverage of the parsers they call (a separate
-# sanitizer build would fuzz its libraries blind, and cost a second long compile in CI).
+# test-sanitize: the whole ctest suite with AddressSanitizer + UndefinedBehaviorSanitizer
+# (IFAB_SANITIZE; gcc, the compiler of `make test`, so the tests see the same floating point and the
+# same draws; -O2 with line tables only, no benchmarks, build-sanitize/). Any UB report ends its
+# program (-fno-sanitize-recover=all), failing the test. The fuzz harnesses replay their corpora
+# there. fuzz: libFuzzer needs clang, and coverage everywhere (IFAB_FUZZ), in its own folder
+# (build-fuzz/), so the sanitized test build stays free of the coverage instrumentation that made
+# it several times slower.
 SANITIZE_DIR ?= build-sanitize
+FUZZ_DIR     ?= build-fuzz
 FUZZ_SECONDS ?= 60
 FUZZ_ARGS    ?=
 
@@ -45,9 +48,8 @@ bench: build
 	@for b in $(BUILD_DIR)/bench/*_bench; do echo "== $$b"; $$b --benchmark_min_time=0.2 || exit 1; done
 
 $(SANITIZE_DIR)/build.ninja: | deps
-	cmake -S . -B $(SANITIZE_DIR) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-	  -DCMAKE_CXX_COMPILER=clang++ -DIFAB_BUILD_BENCHMARKS=OFF -DIFAB_FUZZ=ON \
-	  "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -gline-tables-only" $(CMAKE_ARGS)
+	cmake -S . -B $(SANITIZE_DIR) -G Ninja -DCMAKE_BUILD_TYPE=Release -DIFAB_SANITIZE=ON \
+	  -DIFAB_BUILD_BENCHMARKS=OFF "-DCMAKE_CXX_FLAGS_RELEASE=-O2 -g1 -DNDEBUG" $(CMAKE_ARGS)
 
 test-sanitize: $(SANITIZE_DIR)/build.ninja
 	cmake --build $(SANITIZE_DIR) -j $(JOBS)
@@ -55,12 +57,17 @@ test-sanitize: $(SANITIZE_DIR)/build.ninja
 	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
 	  ctest --output-on-failure -j $(JOBS) --timeout 1800
 
-fuzz-build: $(SANITIZE_DIR)/build.ninja
-	cmake --build $(SANITIZE_DIR) -j $(JOBS) --target fuzzers
+$(FUZZ_DIR)/build.ninja: | deps
+	cmake -S . -B $(FUZZ_DIR) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+	  -DCMAKE_CXX_COMPILER=clang++ -DIFAB_BUILD_BENCHMARKS=OFF -DIFAB_FUZZ=ON -DBUILD_TESTING=OFF \
+	  "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -gline-tables-only" $(CMAKE_ARGS)
 
-# Each harness for FUZZ_SECONDS from its corpus (new inputs are kept in $(SANITIZE_DIR)/fuzz/corpus/).
+fuzz-build: $(FUZZ_DIR)/build.ninja
+	cmake --build $(FUZZ_DIR) -j $(JOBS) --target fuzzers
+
+# Each harness for FUZZ_SECONDS from its corpus (new inputs are kept in $(FUZZ_DIR)/fuzz/corpus/).
 fuzz: fuzz-build
-	@scripts/run-fuzzers $(SANITIZE_DIR) $(FUZZ_SECONDS) $(FUZZ_ARGS)
+	@scripts/run-fuzzers $(FUZZ_DIR) $(FUZZ_SECONDS) $(FUZZ_ARGS)
 
 # ifab beside Open3D, OMPL and KDL on the same inputs (bench/peers.cc): one table. Installs the
 # peers first (they are not dependencies of ifab) and re-configures so CMake finds them.
@@ -71,4 +78,4 @@ bench-peers: build
 	$(BUILD_DIR)/bench/peers $(PEERS_ARGS)
 
 clean:
-	rm -rf $(BUILD_DIR) $(SANITIZE_DIR)
+	rm -rf $(BUILD_DIR) $(SANITIZE_DIR) $(FUZZ_DIR)

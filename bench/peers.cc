@@ -108,8 +108,9 @@ std::vector<Sweep> MakeSweeps(int count) {
     const Pose2& position = positions[static_cast<std::size_t>((v + 1) % 4)];
     // Where the robot really stands (within 1 cm / 0.5 deg of the building position) and where
     // it believes it stands (2 cm / 2 deg off that, random directions).
-    const Pose2 true_pose(position.x + rng.Uniform(-0.01, 0.01), position.y + rng.Uniform(-0.01, 0.01),
-                          position.theta + DegToRad(rng.Uniform(-0.5, 0.5)));
+    const double dtheta = DegToRad(rng.Uniform(-0.5, 0.5));  // last first: gcc's order of the arguments
+    const double dy = rng.Uniform(-0.01, 0.01), dx = rng.Uniform(-0.01, 0.01);
+    const Pose2 true_pose(position.x + dx, position.y + dy, position.theta + dtheta);
     const double a = rng.Uniform(0.0, 2 * M_PI);
     const Pose2 guess_pose(true_pose.x + 0.02 * std::cos(a), true_pose.y + 0.02 * std::sin(a),
                            true_pose.theta + DegToRad(rng.Uniform(0.0, 1.0) < 0.5 ? -2.0 : 2.0));

@@ -40,7 +40,10 @@ void BM_FootprintCost(benchmark::State& state) {
   const FootprintChecker checker(Scene(), Robot());
   RandomStream rng(1);
   std::vector<Pose2> poses;
-  for (int i = 0; i < 1024; ++i) poses.emplace_back(rng.Uniform(-2, 2), rng.Uniform(-1.5, 1.5), rng.Uniform(-kPi, kPi));
+  for (int i = 0; i < 1024; ++i) {  // last argument first: gcc's order (a call's is unspecified)
+    const double theta = rng.Uniform(-kPi, kPi), y = rng.Uniform(-1.5, 1.5), x = rng.Uniform(-2, 2);
+    poses.emplace_back(x, y, theta);
+  }
   std::size_t i = 0;
   for (auto _ : state) benchmark::DoNotOptimize(checker.Cost(poses[i++ % poses.size()], 0.15, 1.0));
 }

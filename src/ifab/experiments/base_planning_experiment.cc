@@ -78,7 +78,9 @@ Pose2 SampleExperimentPose(const FootprintChecker& checker, const BasePlanningEx
       if (c.x() < box[0] || c.x() > box[1] || c.y() < box[2] || c.y() > box[3]) continue;
       pose = Pose2(c.x(), c.y(), WrapAngle(a + kPi + rng.Uniform(-o.building_heading_noise, o.building_heading_noise)));
     } else {
-      pose = Pose2(rng.Uniform(lo.x(), hi.x()), rng.Uniform(lo.y(), hi.y()), rng.Uniform(-kPi, kPi));
+      // Heading first, then y, then x: gcc's order of the arguments (C++ leaves it open).
+      const double theta = rng.Uniform(-kPi, kPi), y = rng.Uniform(lo.y(), hi.y()), x = rng.Uniform(lo.x(), hi.x());
+      pose = Pose2(x, y, theta);
     }
     if (checker.Clearance(pose) < o.pose_min_clearance) continue;
     if (!building && !boundary.empty()) {

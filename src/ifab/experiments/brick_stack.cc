@@ -259,8 +259,9 @@ Pose3 CalibrateMount(const Setup& setup, std::uint64_t seed, const RunContext& c
                      RangeBiasCompensation* compensation) {
   const sequencer::LaserCalibrationPlan& plan = setup.calibration;
   RandomStream rng(seed + 7919);
-  const Pose3 T_base_cube_true = plan.T_base_cube() * PoseFromXyzRpy(rng.Normal(0.005), rng.Normal(0.005), 0, 0, 0,
-                                                                      DegToRad(rng.Normal(2.0)));
+  // Named draws, last argument first (gcc's order; C++ leaves a call's order open).
+  const double yaw = DegToRad(rng.Normal(2.0)), y = rng.Normal(0.005), x = rng.Normal(0.005);
+  const Pose3 T_base_cube_true = plan.T_base_cube() * PoseFromXyzRpy(x, y, 0, 0, 0, yaw);
   const Pose3 T_site_cube = PoseFromXyzRpy(0.0, 0.0, 0.5 * plan.cube_size, 0.0, 0.0, 0.0);
   const auto b = XyzRpyFromPose(T_site_cube * T_base_cube_true.inverse());
   sim::SimOptions sim_options = setup.sim_options;

@@ -179,9 +179,10 @@ json RunRegistrationConsistency(const RunContext& ctx) {
 
   // The brick on the floor in front of the robot, placed within a few mm of its design spot.
   const Pose3 T_base_brick_design = PoseFromXyzRpy(bb[0], bb[1], 0.026, 0, 0, DegToRad(bb[2]));
-  const Pose3 T_base_brick_true =
-      T_base_brick_design * PoseFromXyzRpy(rng.Normal(place_sigma[0]), rng.Normal(place_sigma[0]), 0, 0, 0,
-                                           DegToRad(rng.Normal(place_sigma[1])));
+  // Named draws, last argument first: gcc's order (C++ leaves a call's order open), every compiler alike.
+  const double place_yaw = DegToRad(rng.Normal(place_sigma[1]));
+  const double place_y = rng.Normal(place_sigma[0]), place_x = rng.Normal(place_sigma[0]);
+  const Pose3 T_base_brick_true = T_base_brick_design * PoseFromXyzRpy(place_x, place_y, 0, 0, 0, place_yaw);
   const Pose3 T_site_brick = PoseFromXyzRpy(0.0, 0.0, 0.026, 0, 0, 0);
   const Pose3 T_site_base = T_site_brick * T_base_brick_true.inverse();
   const auto b = XyzRpyFromPose(T_site_base);
@@ -213,9 +214,10 @@ json RunRegistrationConsistency(const RunContext& ctx) {
       if (crop_radius > 0.0)
         std::erase_if(cloud, [&](const RayPoint& p) { return (p.p.head<2>() - Eigen::Vector2d(bb[0], bb[1])).norm() > crop_radius; });
       // The expected brick pose: its design spot, the robot's localization off by guess_error.
-      const Pose3 guess = T_base_brick_design * PoseFromXyzRpy(rng.Uniform(-guess_error[0], guess_error[0]),
-                                                               rng.Uniform(-guess_error[0], guess_error[0]), 0, 0, 0,
-                                                               DegToRad(rng.Uniform(-guess_error[1], guess_error[1])));
+      const double guess_yaw = DegToRad(rng.Uniform(-guess_error[1], guess_error[1]));  // last first, as above
+      const double guess_y = rng.Uniform(-guess_error[0], guess_error[0]);
+      const double guess_x = rng.Uniform(-guess_error[0], guess_error[0]);
+      const Pose3 guess = T_base_brick_design * PoseFromXyzRpy(guess_x, guess_y, 0, 0, 0, guess_yaw);
       RigidObject ground{"ground", Pose3::Identity(), {Plane{Eigen::Vector3d::UnitZ(), -0.026}}};
       RigidObject brick_object{"brick", Pose3::Identity(), {brick}};
       std::vector<RegistrationBody> bodies;
@@ -325,9 +327,10 @@ json RunCalibrationConsistency(const RunContext& ctx) {
   for (std::size_t d = 0; d < ds.size(); ++d) {
     const auto cb = ds[d].AsNumbers(3);  // cube x y [m], yaw [deg] in base (design placement)
     const Pose3 T_base_cube_design = PoseFromXyzRpy(cb[0], cb[1], 0.5 * size, 0, 0, DegToRad(cb[2]));
-    const Pose3 T_base_cube_true =
-        T_base_cube_design * PoseFromXyzRpy(rng.Normal(place_sigma[0]), rng.Normal(place_sigma[0]), 0, 0, 0,
-                                            DegToRad(rng.Normal(place_sigma[1])));
+    // Named draws, last argument first: gcc's order (C++ leaves a call's order open), every compiler alike.
+    const double place_yaw = DegToRad(rng.Normal(place_sigma[1]));
+    const double place_y = rng.Normal(place_sigma[0]), place_x = rng.Normal(place_sigma[0]);
+    const Pose3 T_base_cube_true = T_base_cube_design * PoseFromXyzRpy(place_x, place_y, 0, 0, 0, place_yaw);
     const std::string label = fmt::format("data set {}", d + 1);
     plan.cube_in_base = Eigen::Vector3d(cb[0], cb[1], DegToRad(cb[2]));
     const auto recorded = RecordCalibrationSet(setup, plan, T_base_cube_true, ctx.seed + 100 * (d + 1), ctx, label,
@@ -337,9 +340,12 @@ json RunCalibrationConsistency(const RunContext& ctx) {
     std::vector<Pose3> guesses_mount, guesses_cube;
     std::vector<double> guesses_ground;
     auto jitter = [&]() {
-      return PoseFromXyzRpy(rng.Uniform(-guess[0], guess[0]), rng.Uniform(-guess[0], guess[0]),
-                            rng.Uniform(-guess[0], guess[0]), DegToRad(rng.Uniform(-guess[1], guess[1])),
-                            DegToRad(rng.Uniform(-guess[1], guess[1])), DegToRad(rng.Uniform(-guess[1], guess[1])));
+      const double yaw = DegToRad(rng.Uniform(-guess[1], guess[1]));  // last first, as above
+      const double pitch = DegToRad(rng.Uniform(-guess[1], guess[1]));
+      const double roll = DegToRad(rng.Uniform(-guess[1], guess[1]));
+      const double z = rng.Uniform(-guess[0], guess[0]), y = rng.Uniform(-guess[0], guess[0]);
+      const double x = rng.Uniform(-guess[0], guess[0]);
+      return PoseFromXyzRpy(x, y, z, roll, pitch, yaw);
     };
     for (int t = 0; t < trials; ++t) {
       guesses_mount.push_back(design * jitter());

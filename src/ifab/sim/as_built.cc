@@ -197,8 +197,11 @@ AsBuilt DrawAsBuilt(const AsBuiltTolerances& t, const RobotModel& design_robot, 
     for (int i = 0; i < 6; ++i) a.joint_offsets[i] = DegToRad(rng.Normal(t.joint_offset_sigma_deg));
     for (unsigned i = 0; i < design_robot.arm_chain.getNrOfSegments(); ++i) {
       const double s = t.link_length_sigma_m, r = DegToRad(t.link_angle_sigma_deg);
-      a.link_errors.push_back(PoseFromXyzRpy(rng.Normal(s), rng.Normal(s), rng.Normal(s), rng.Normal(r), rng.Normal(r),
-                                             rng.Normal(r)));
+      // Named draws, last coordinate first: C++ leaves the order of a call's arguments open, and
+      // this is the order gcc used for the recorded worlds (clang drew them the other way round).
+      const double yaw = rng.Normal(r), pitch = rng.Normal(r), roll = rng.Normal(r);
+      const double z = rng.Normal(s), y = rng.Normal(s), x = rng.Normal(s);
+      a.link_errors.push_back(PoseFromXyzRpy(x, y, z, roll, pitch, yaw));
     }
     a.gravity_compliance = {rng.Uniform(t.gravity_compliance_min, t.gravity_compliance_max),
                             rng.Uniform(t.gravity_compliance_min, t.gravity_compliance_max)};

@@ -67,7 +67,8 @@ std::vector<FaultSpec> FaultInjector::Draw(RandomStream& rng, const FaultDrawOpt
         break;
       case FaultKind::kTrackSlip:
         f.duration = rng.Uniform(1.0, 3.0);
-        f.magnitude = (rng.Bernoulli(0.5) ? 1 : -1) * rng.Uniform(0.3, 0.6);
+        f.magnitude = rng.Bernoulli(0.5) ? 1 : -1;  // a product's operands are unsequenced: draw the sign first
+        f.magnitude *= rng.Uniform(0.3, 0.6);
         break;
       case FaultKind::kTrackStall:
         f.duration = rng.Uniform(1.0, 4.0);
@@ -77,11 +78,15 @@ std::vector<FaultSpec> FaultInjector::Draw(RandomStream& rng, const FaultDrawOpt
         f.count = rng.UniformInt(2, 8);
         f.magnitude = rng.Uniform(3.0, 8.0);  // rad/s: shocks, far beyond any turn of the base
         break;
-      case FaultKind::kGyroBiasStep: f.magnitude = DegToRad(rng.Uniform(0.2, 1.0)) * (rng.Bernoulli(0.5) ? 1 : -1); break;
+      case FaultKind::kGyroBiasStep:  // size, then sign (one draw per statement: a fixed order)
+        f.magnitude = DegToRad(rng.Uniform(0.2, 1.0));
+        f.magnitude *= rng.Bernoulli(0.5) ? 1 : -1;
+        break;
       case FaultKind::kClockJump: {
         const DeviceId devices[] = {DeviceId::kBaseLaser, DeviceId::kArmLaser, DeviceId::kGyro, DeviceId::kArm};
         f.device = devices[rng.UniformInt(0, 3)];
-        f.magnitude = rng.Uniform(0.5, 2.0) * (rng.Bernoulli(0.5) ? 1 : -1);
+        f.magnitude = rng.Uniform(0.5, 2.0);  // size, then sign
+        f.magnitude *= rng.Bernoulli(0.5) ? 1 : -1;
         break;
       }
       case FaultKind::kArmTrajectoryRejected: f.index = rng.UniformInt(2, o.max_trajectory_index); break;

@@ -147,9 +147,10 @@ void SimRobot::PresentFeederBrick() {
     for (int k = 0; k < 3; ++k) feeder_brick_.box.size[k] = a.brick_mean_size[k] + rng.Normal(a.brick_size_sigma[k]);
     brick_leans_ = {rng.Normal(a.brick_lean_sigma), rng.Normal(a.brick_lean_sigma)};
   }
-  feeder_brick_.T_site_box = options_.T_base_feeder *
-      PoseFromXyzRpy(gripper_rng_.Normal(options_.feeder_sigma_xy), gripper_rng_.Normal(options_.feeder_sigma_xy), 0,
-                     0, 0, DegToRad(gripper_rng_.Normal(options_.feeder_sigma_yaw_deg)));
+  // Named draws in gcc's order of the arguments (last first), so every compiler draws the same brick.
+  const double yaw = DegToRad(gripper_rng_.Normal(options_.feeder_sigma_yaw_deg));
+  const double y = gripper_rng_.Normal(options_.feeder_sigma_xy), x = gripper_rng_.Normal(options_.feeder_sigma_xy);
+  feeder_brick_.T_site_box = options_.T_base_feeder * PoseFromXyzRpy(x, y, 0, 0, 0, yaw);
 }
 
 Vector6d SimRobot::LinkAngles(const Vector6d& q) const {

@@ -35,7 +35,10 @@ class PrimitiveConformance : public ::testing::TestWithParam<PrimitiveCase> {};
 // not change within the finite-difference step.
 std::vector<Eigen::Vector3d> Queries(RandomStream& rng, int n) {
   std::vector<Eigen::Vector3d> q;
-  for (int i = 0; i < n; ++i) q.emplace_back(rng.Uniform(-0.4, 0.6), rng.Uniform(-0.3, 0.5), rng.Uniform(-0.3, 0.4));
+  for (int i = 0; i < n; ++i) {  // z, y, x: gcc's order of a call's arguments (C++ leaves it open)
+    const double z = rng.Uniform(-0.3, 0.4), y = rng.Uniform(-0.3, 0.5), x = rng.Uniform(-0.4, 0.6);
+    q.emplace_back(x, y, z);
+  }
   return q;
 }
 
@@ -149,7 +152,8 @@ TEST_P(PrimitiveConformance, MountJacobianMatchesFiniteDifferences) {
   RandomStream rng(4);
   int checked = 0;
   for (int i = 0; i < 60; ++i) {
-    const Eigen::Vector3d p_laser(rng.Uniform(0.8, 1.4), rng.Uniform(-0.4, 0.4), 0.0);
+    const double py = rng.Uniform(-0.4, 0.4), px = rng.Uniform(0.8, 1.4);  // y first, as in Queries
+    const Eigen::Vector3d p_laser(px, py, 0.0);
     Eigen::VectorXd x(12);
     x << T_tool0_laser.translation(), 0.01, 0.02, -0.01, T_base_body.translation(), -0.01, 0.0, 0.02;
     const RayT<double> ray0 = LaserRay<double>(PoseT<double>(x.data(), R0l), T_base_tool0, p_laser);

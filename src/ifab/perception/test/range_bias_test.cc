@@ -63,10 +63,12 @@ std::vector<CalibrationSweep> Sweeps(const Scene& world, const Pose3& T_tool0_la
     CalibrationSweep sw;
     sw.name = "view " + std::to_string(v);
     Pose3 posture_error = Pose3::Identity();
-    if (posture_sigma > 0.0)
-      posture_error = PoseFromXyzRpy(rng.Normal(posture_sigma), rng.Normal(posture_sigma),
-                                     rng.Normal(posture_sigma), rng.Normal(posture_sigma),
-                                     rng.Normal(posture_sigma), rng.Normal(posture_sigma));
+    if (posture_sigma > 0.0) {
+      // Draws named, last argument first: gcc's order of a call's arguments (C++ leaves it open).
+      double e[6];
+      for (int k = 5; k >= 0; --k) e[k] = rng.Normal(posture_sigma);
+      posture_error = PoseFromXyzRpy(e[0], e[1], e[2], e[3], e[4], e[5]);
+    }
     const int scans = 12;
     for (int k = 0; k < scans; ++k) {
       const double turn = 0.12 * (k / double(scans - 1) - 0.5);  // the view turns +-3.4 deg

@@ -65,7 +65,9 @@ inline double CastBeam(const Scene& world, const Pose3& T_base_laser, double a, 
     bias = laser.range_bias(r0, std::acos(std::min(1.0, std::abs(hit->normal.dot(d)))));
   }
   if (!laser.noisy) return r0 + bias;
-  double r = cast(a + rng.Normal(beam), rng.Normal(beam));
+  // Elevation noise first, then azimuth: gcc's order of the call's arguments (C++ leaves it open).
+  const double de = rng.Normal(beam), da = rng.Normal(beam);
+  double r = cast(a + da, de);
   if (!std::isfinite(r)) r = r0;
   return r + bias + rng.Normal(laser.noise.sigma_along);
 }

@@ -23,8 +23,9 @@ std::vector<AccelSample> Samples(const Eigen::Matrix3d& R_site_base, const Eigen
   for (int i = 0; i < 800; ++i) {  // the mission's 2 s window
     AccelSample s;
     s.stamp.t = t0 + i / 400.0;
-    s.specific_force = R_site_base.transpose() * Eigen::Vector3d(0, 0, kG) + bias +
-                       Eigen::Vector3d(rng.Normal(sigma), rng.Normal(sigma), rng.Normal(sigma));
+    // Draws named, last coordinate first: gcc's order of a call's arguments (C++ leaves it open).
+    const double nz = rng.Normal(sigma), ny = rng.Normal(sigma), nx = rng.Normal(sigma);
+    s.specific_force = R_site_base.transpose() * Eigen::Vector3d(0, 0, kG) + bias + Eigen::Vector3d(nx, ny, nz);
     out.push_back(s);
   }
   return out;
@@ -35,8 +36,10 @@ TEST(Tilt, CompensationRemovesACommandedTiltChange) {
   double worst_compensated = 0.0, worst_raw = 0.0, sum_compensated = 0.0;
   for (int trial = 0; trial < 50; ++trial) {
     // The base at the scan: on an uneven floor (a few tenths of a degree), anywhere, any heading.
-    const Pose3 T_ref = PoseFromXyzRpy(rng.Uniform(-2, 2), rng.Uniform(-2, 2), rng.Normal(0.003),
-                                       DegToRad(rng.Normal(0.2)), DegToRad(rng.Normal(0.2)), rng.Uniform(-kPi, kPi));
+    // (Draws named, last argument first, as in Samples.)
+    const double yaw = rng.Uniform(-kPi, kPi), pitch = DegToRad(rng.Normal(0.2)), roll = DegToRad(rng.Normal(0.2));
+    const double z = rng.Normal(0.003), y = rng.Uniform(-2, 2), x = rng.Uniform(-2, 2);
+    const Pose3 T_ref = PoseFromXyzRpy(x, y, z, roll, pitch, yaw);
     // The commanded tilt change (the arm reaching out with a brick): up to 0.3 deg about a
     // horizontal axis of the base, turning about the base's origin.
     const double a = rng.Uniform(0, 2 * kPi);
@@ -44,7 +47,8 @@ TEST(Tilt, CompensationRemovesACommandedTiltChange) {
         Eigen::AngleAxisd(DegToRad(rng.Uniform(0.05, 0.3)), Eigen::Vector3d(std::cos(a), std::sin(a), 0)).toRotationMatrix();
     Pose3 T_now = T_ref;
     T_now.linear() = T_ref.linear() * R_change;
-    const Eigen::Vector3d bias = 9.80665e-3 * Eigen::Vector3d(rng.Normal(0.5), rng.Normal(0.5), rng.Normal(0.5));
+    const double bz = rng.Normal(0.5), by = rng.Normal(0.5), bx = rng.Normal(0.5);
+    const Eigen::Vector3d bias = 9.80665e-3 * Eigen::Vector3d(bx, by, bz);
     const auto before = Samples(T_ref.linear(), bias, 0.0, rng);
     const auto after = Samples(T_now.linear(), bias, 10.0, rng);
     const auto up_ref = MeanUp(before, 0.0, 2.0);

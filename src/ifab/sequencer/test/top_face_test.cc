@@ -36,10 +36,11 @@ std::vector<RayPoint> Sweep(const SiteBox& model, double offset, const Pose3& T_
     cloud.push_back(r);
   };
   for (int i = 0; i < 400; ++i) {
-    add(model.T_site_box * Eigen::Vector3d(rng.Uniform(-h.x(), h.x()), rng.Uniform(-h.y(), h.y()),
-                                           h.z() + offset + rng.Normal(0.008)));  // top
-    add(model.T_site_box * Eigen::Vector3d(rng.Uniform(-h.x(), h.x()), -h.y() + rng.Normal(0.008),
-                                           rng.Uniform(-h.z(), h.z())));  // side
+    // Draws named, last coordinate first: gcc's order of a call's arguments (C++ leaves it open).
+    const double top_z = rng.Normal(0.008), top_y = rng.Uniform(-h.y(), h.y()), top_x = rng.Uniform(-h.x(), h.x());
+    add(model.T_site_box * Eigen::Vector3d(top_x, top_y, h.z() + offset + top_z));  // top
+    const double side_z = rng.Uniform(-h.z(), h.z()), side_y = rng.Normal(0.008), side_x = rng.Uniform(-h.x(), h.x());
+    add(model.T_site_box * Eigen::Vector3d(side_x, -h.y() + side_y, side_z));  // side
     const double a = rng.Uniform(0.0, 2.0 * M_PI), r = rng.Uniform(0.2, 0.6);
     const double x = c.x() + r * std::cos(a), y = c.y() + r * std::sin(a);
     add({x, y, slope * (x - c.x()) + rng.Normal(0.008)});  // floor

@@ -47,7 +47,8 @@ TEST(World, RaysOverTheUnevenFloorHitTheFirstSurface) {
     // Base-laser-like beams: 0.3 m up, tilted down by 0 to 2 deg (shallow ones are as steep as
     // the floor's slopes), and arm-laser-like beams steeply down.
     const bool steep = k % 4 == 0;
-    const Eigen::Vector3d o(rng.Uniform(-2.0, 2.0), rng.Uniform(-2.0, 2.0), steep ? 1.2 : 0.3);
+    const double oy = rng.Uniform(-2.0, 2.0), ox = rng.Uniform(-2.0, 2.0);  // y first: gcc's order of the arguments
+    const Eigen::Vector3d o(ox, oy, steep ? 1.2 : 0.3);
     const double az = rng.Uniform(-M_PI, M_PI);
     const double el = steep ? rng.Uniform(-1.4, -0.4) : -rng.Uniform(0.0, 0.035);
     const Eigen::Vector3d d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
@@ -85,7 +86,8 @@ TEST(World, ShallowRaysHitTheFloorOnlyOnTheFloor) {
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
     const World world(site, DrawAsBuilt(tol, robot, site, options.arm_laser, seed).floor);
     for (int k = 0; k < 100000; ++k) {
-      const Eigen::Vector3d o(rng.Uniform(-2.0, 2.0), rng.Uniform(-2.0, 2.0), 0.3);
+      const double oy = rng.Uniform(-2.0, 2.0), ox = rng.Uniform(-2.0, 2.0);  // y first, as above
+      const Eigen::Vector3d o(ox, oy, 0.3);
       const double az = rng.Uniform(-M_PI, M_PI), el = -rng.Uniform(0.0, 0.004);
       const Eigen::Vector3d d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
       const auto hit = world.CastRay(o, d, 1e-6, 31.0);

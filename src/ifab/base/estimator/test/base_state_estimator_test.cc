@@ -270,7 +270,8 @@ double MeanHeadingDriftDeg(Thinning thinning, bool interpolate = false) {
   const int trials = 6, steps = 160;
   double sum = 0.0;
   for (int k = 0; k < trials; ++k) {
-    Pose2 truth(rng.Uniform(-0.5, 0.5), rng.Uniform(-0.5, 0.5), 0.0);
+    const double y0 = rng.Uniform(-0.5, 0.5), x0 = rng.Uniform(-0.5, 0.5);  // y first: gcc's order of the arguments
+    Pose2 truth(x0, y0, 0.0);
     truth.theta = std::atan2(-truth.y, -truth.x) + rng.Uniform(-0.3, 0.3);  // through the middle
     const Pose2 start = truth;
     BaseStateEstimator estimator(o, T_base_laser);

@@ -89,7 +89,8 @@ TEST(FootprintChecker, ClearanceMatchesGenericConvexDistance) {
   const FootprintChecker checker(scene, robot);
   RandomStream rng(7);
   for (int i = 0; i < 2000; ++i) {
-    const Pose2 pose(rng.Uniform(-4, 4), rng.Uniform(-3, 3), rng.Uniform(-kPi, kPi));
+    const double theta = rng.Uniform(-kPi, kPi), y = rng.Uniform(-3, 3);  // last first: gcc's order of the arguments
+    const Pose2 pose(rng.Uniform(-4, 4), y, theta);
     const auto corners = robot.Corners(pose);
     const std::vector<Eigen::Vector2d> box(corners.begin(), corners.end());
     double expected = std::numeric_limits<double>::infinity();
@@ -112,7 +113,8 @@ TEST(FootprintChecker, CostMatchesTheHingeOverEveryObject) {
   RandomStream rng(11);
   int costly = 0;
   for (int i = 0; i < 2000; ++i) {
-    const Pose2 pose(rng.Uniform(-4, 4), rng.Uniform(-3, 3), rng.Uniform(-kPi, kPi));
+    const double theta = rng.Uniform(-kPi, kPi), y = rng.Uniform(-3, 3);  // last first: gcc's order of the arguments
+    const Pose2 pose(rng.Uniform(-4, 4), y, theta);
     const auto corners = robot.Corners(pose);
     const std::vector<Eigen::Vector2d> box(corners.begin(), corners.end());
     const auto hinge = [&](double d) { return std::max(0.0, margin - d) + (d < 0.0 ? penalty : 0.0); };

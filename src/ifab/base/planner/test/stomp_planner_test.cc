@@ -122,11 +122,15 @@ TEST(StompBasePlanner, ClearanceFieldLeavesPointCostsUnchanged) {
   int zero_points = 0, costly_points = 0;
   for (int t = 0; t < 200; ++t) {
     TrajectoryMatrix q(rows, 3);
-    const Eigen::Vector3d a(rng.Uniform(-4, 4), rng.Uniform(-3, 3), rng.Uniform(-kPi, kPi));
-    const Eigen::Vector3d b(rng.Uniform(-4, 4), rng.Uniform(-3, 3), rng.Uniform(-kPi, kPi));
+    // Draws named, last coordinate first: gcc's order of a call's arguments (C++ leaves it open).
+    const double a_t = rng.Uniform(-kPi, kPi), a_y = rng.Uniform(-3, 3), a_x = rng.Uniform(-4, 4);
+    const Eigen::Vector3d a(a_x, a_y, a_t);
+    const double b_t = rng.Uniform(-kPi, kPi), b_y = rng.Uniform(-3, 3), b_x = rng.Uniform(-4, 4);
+    const Eigen::Vector3d b(b_x, b_y, b_t);
     for (int i = 0; i < rows; ++i) {
       const double f = static_cast<double>(i) / (rows - 1);
-      q.row(i) = (a + f * (b - a)).transpose() + 0.05 * Eigen::RowVector3d(rng.Normal(), rng.Normal(), rng.Normal());
+      const double n_t = rng.Normal(), n_y = rng.Normal(), n_x = rng.Normal();
+      q.row(i) = (a + f * (b - a)).transpose() + 0.05 * Eigen::RowVector3d(n_x, n_y, n_t);
     }
     Eigen::VectorXd c1, c2, smooth = Eigen::VectorXd::Zero(rows);
     with.PointCosts(q, &c1);

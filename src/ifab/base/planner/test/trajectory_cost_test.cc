@@ -183,7 +183,10 @@ TEST_F(ProjectorTest, GaussNewtonStepsConvergeNearAFeasibleTrajectory) {
   for (int i = 0; i < n + 2; ++i) {
     const double a = 0.1 * i;
     near.row(i) << 3 * std::sin(a), 3 - 3 * std::cos(a), a;
-    if (i > 0 && i < n + 1) near.row(i) += Eigen::RowVector3d(rng.Normal(0.01), rng.Normal(0.01), rng.Normal(0.01));
+    if (i > 0 && i < n + 1) {  // last coordinate first: gcc's order of a call's arguments
+      const double dt = rng.Normal(0.01), dy = rng.Normal(0.01), dx = rng.Normal(0.01);
+      near.row(i) += Eigen::RowVector3d(dx, dy, dt);
+    }
   }
   double before = LateralResiduals(near).norm();
   for (int it = 0; it < 3; ++it) {
