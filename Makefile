@@ -6,7 +6,8 @@ CMAKE_ARGS ?=
 RUN_ARGS  ?=
 # test-sanitize: the whole ctest suite with AddressSanitizer + UndefinedBehaviorSanitizer
 # (IFAB_SANITIZE; gcc, the compiler of `make test`, so the tests see the same floating point and the
-# same draws; -O2 with line tables only, no benchmarks, build-sanitize/). Any UB report ends its
+# same draws; -O2 with line tables only, no benchmarks, build-sanitize/; without the whole-mission
+# tests, ctest label "mission", which `make test` runs). Any UB report ends its
 # program (-fno-sanitize-recover=all), failing the test. The fuzz harnesses replay their corpora
 # there. fuzz: libFuzzer needs clang, and coverage everywhere (IFAB_FUZZ), in its own folder
 # (build-fuzz/), so the sanitized test build stays free of the coverage instrumentation that made
@@ -55,7 +56,7 @@ test-sanitize: $(SANITIZE_DIR)/build.ninja
 	cmake --build $(SANITIZE_DIR) -j $(JOBS)
 	cd $(SANITIZE_DIR) && ASAN_OPTIONS=detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1 \
 	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-	  ctest --output-on-failure -j $(JOBS) --timeout 1800
+	  ctest --output-on-failure -j $(JOBS) --timeout 1800 --label-exclude mission
 
 $(FUZZ_DIR)/build.ninja: | deps
 	cmake -S . -B $(FUZZ_DIR) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
