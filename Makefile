@@ -4,7 +4,7 @@ BUILD_DIR ?= build
 JOBS      ?= 2
 CMAKE_ARGS ?=
 RUN_ARGS  ?=
-# test-sanitize: the whole ctest suite with AddressSanitizer + UndefinedBehaviorSanitizer
+# test-sanitize: the ctest suite with AddressSanitizer + UndefinedBehaviorSanitizer
 # (IFAB_SANITIZE; gcc, the compiler of `make test`, so the tests see the same floating point and the
 # same draws; -O2 with line tables only, no benchmarks, build-sanitize/; without the whole-mission
 # tests, ctest label "mission", which `make test` runs). Any UB report ends its
