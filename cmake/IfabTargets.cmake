@@ -82,7 +82,8 @@ function(_ifab_collect_links target out)
   set(${out} ${seen} PARENT_SCOPE)
 endfunction()
 
-# The one rule that keeps results honest: no algorithm module links the simulator.
+# The one rule that keeps results honest: no algorithm module links the simulator; and none links
+# a JSON library (file formats live in experiments/ and app/).
 # Fails the configure step if any algorithm target reaches a forbidden target.
 function(ifab_check_layering)
   cmake_parse_arguments(ARG "" "" "ALGORITHMS;FORBIDDEN" ${ARGN})
@@ -95,7 +96,7 @@ function(ifab_check_layering)
       foreach(f IN LISTS ARG_FORBIDDEN)
         if(f IN_LIST all)
           message(FATAL_ERROR "Layering violation: algorithm target ${t} links ${f}. "
-                              "Only experiments and app may see the simulator (DESIGN.md).")
+                              "Only experiments and app may see the simulator or a JSON library (DESIGN.md).")
         endif()
       endforeach()
     endif()

@@ -3,7 +3,7 @@
 #include <sstream>
 
 #include "fuzz_common.h"
-#include "ifab/perception/sweep_io.h"
+#include "ifab/experiments/sweep_io.h"
 
 IFAB_FUZZ_TARGET({
   std::istringstream in(input);

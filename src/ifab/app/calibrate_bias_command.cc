@@ -17,7 +17,7 @@
 #include "ifab/app/perception_commands.h"
 #include "ifab/experiments/perception_json.h"
 #include "ifab/perception/scan_assembly.h"
-#include "ifab/perception/sweep_io.h"
+#include "ifab/experiments/sweep_io.h"
 #include "ifab/sequencer/laser_sweeps.h"
 
 namespace ifab::app {
@@ -128,7 +128,7 @@ void AddCalibrateBiasCommand(CLI::App& app, int& exit_code) {
       "Identify the arm laser's range bias in range and incidence, with its uncertainty, together with the laser's\n"
       "mount (the paper's Sec. VII leaves this as future work), from recorded sweeps of a cube on the floor and of\n"
       "the bare floor from several heights (Fig. 7). Each SWEEP is a JSON file of arm laser scans and joint states\n"
-      "(format: src/ifab/perception/sweep_io.h). Writes DIR/range_bias.json (the model at its knots with std, the\n"
+      "(format: src/ifab/experiments/sweep_io.h). Writes DIR/range_bias.json (the model at its knots with std, the\n"
       "mount) and DIR/range_bias.yaml (a scan_assembly `range_bias:` section). Exit code 0 if usable, 1 if not,\n"
       "2 for bad input.");
   sub->add_option("sweeps", o->cube_sweeps, "Sweep files of the cube on the floor")->required();

@@ -1,5 +1,5 @@
 // `ifab calibrate SWEEP.json... --out DIR`: extrinsic calibration of the arm laser (paper Sec. V-C)
-// from recorded sweeps of a cube on the floor. The sweep file format is in perception/sweep_io.h;
+// from recorded sweeps of a cube on the floor. The sweep file format is in experiments/sweep_io.h;
 // the work is app/perception_commands.h.
 
 #include <iostream>
@@ -14,7 +14,7 @@ void AddCalibrateCommand(CLI::App& app, int& exit_code) {
   CLI::App* sub = app.add_subcommand(
       "calibrate",
       "Calibrate the arm laser's mount T_tool0_laser (paper Sec. V-C) from sweeps of a cube on the floor.\n"
-      "Each SWEEP is a JSON file of arm laser scans and joint states (format: src/ifab/perception/sweep_io.h).\n"
+      "Each SWEEP is a JSON file of arm laser scans and joint states (format: src/ifab/experiments/sweep_io.h).\n"
       "The noise model as for `ifab register` (--sensor; default: estimated from the residuals).\n"
       "Writes DIR/calibration.json and DIR/arm_laser_mount.yaml. Exit code 0 if usable (converged, the fit agrees\n"
       "with the noise model, every direction of the mount fixed by the sweeps), 1 if not, 2 for bad input.");

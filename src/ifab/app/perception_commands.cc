@@ -20,7 +20,7 @@
 #include "ifab/perception/ply.h"
 #include "ifab/perception/registration.h"
 #include "ifab/perception/scan_assembly.h"
-#include "ifab/perception/sweep_io.h"
+#include "ifab/experiments/sweep_io.h"
 
 namespace ifab {
 namespace {

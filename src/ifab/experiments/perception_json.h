@@ -7,7 +7,7 @@
 
 #include "ifab/core/se3.h"
 #include "ifab/perception/registration.h"
-#include "ifab/perception/sweep_io.h"
+#include "ifab/experiments/sweep_io.h"
 
 namespace ifab {
 
@@ -22,7 +22,7 @@ nlohmann::json BodyToJson(const RegisteredBody& body, bool usable);
 /// The noise model used and the test of the fit (fit_quality.h).
 nlohmann::json FitToJson(const FitQuality& fit);
 
-/// Write a sweep file (perception/sweep_io.h's format), in full or not at all.
+/// Write a sweep file (experiments/sweep_io.h's format), in full or not at all.
 void SaveSweep(const std::string& path, const SweepRecording& sweep, bool raw_stamps = false);
 
 }  // namespace ifab

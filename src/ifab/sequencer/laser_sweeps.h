@@ -16,7 +16,7 @@
 #include "ifab/model/robot_model.h"
 #include "ifab/perception/calibration.h"
 #include "ifab/perception/range_bias.h"
-#include "ifab/perception/sweep_io.h"
+#include "ifab/perception/sweep_recording.h"
 #include "ifab/sync/clock_sync.h"
 
 namespace ifab {

@@ -15,7 +15,7 @@
 #include "ifab/perception/ply.h"
 #include "ifab/perception/registration.h"
 #include "ifab/experiments/perception_json.h"
-#include "ifab/perception/sweep_io.h"
+#include "ifab/experiments/sweep_io.h"
 #include "ifab/perception/testing/synthetic.h"
 #include "ifab/sync/clock_sync.h"
 

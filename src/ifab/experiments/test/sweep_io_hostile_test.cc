@@ -4,7 +4,7 @@
 #include <sstream>
 
 #include "ifab/core/testing/error_of.h"
-#include "ifab/perception/sweep_io.h"
+#include "ifab/experiments/sweep_io.h"
 
 namespace ifab {
 namespace {

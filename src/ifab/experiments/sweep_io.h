@@ -1,7 +1,8 @@
 #pragma once
 /// \file
 /// Recorded arm sweeps, for `ifab calibrate` and for keeping data: one JSON file per sweep (one
-/// joint moving while the arm laser scans). Read here; written by experiments/ and app/.
+/// joint moving while the arm laser scans). Read and written here, outside the algorithm modules
+/// (which link no JSON library); the recording itself is perception/sweep_recording.h.
 ///
 /// Format (version 1):
 ///
@@ -27,16 +28,9 @@
 #include <string>
 #include <vector>
 
-#include "ifab/msgs/msgs.h"
+#include "ifab/perception/sweep_recording.h"
 
 namespace ifab {
-
-struct SweepRecording {
-  std::string name;
-  std::vector<LaserScan> scans;
-  std::vector<JointState> joint_states;
-  std::vector<SyncPulse> sync_pulses;  ///< empty when times are host times already
-};
 
 /// Read a sweep file; host times are filled in (from the pulses if the file has raw stamps).
 /// Throws InputError naming the file and the field that is wrong.
@@ -45,7 +39,7 @@ SweepRecording LoadSweep(const std::string& path);
 SweepRecording ParseSweep(std::istream& in, const std::string& name);
 
 /// The sweep in the file format above (host times; pulses and device stamps too if
-/// `raw_stamps`). This module writes no files: experiments/perception_json.h's SaveSweep does.
+/// `raw_stamps`) to a stream; experiments/perception_json.h's SaveSweep writes the file.
 void WriteSweep(std::ostream& out, const SweepRecording& sweep, bool raw_stamps = false);
 
 }  // namespace ifab

@@ -1,4 +1,4 @@
-#include "ifab/perception/sweep_io.h"
+#include "ifab/experiments/sweep_io.h"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>

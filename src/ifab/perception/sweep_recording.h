@@ -1,0 +1,20 @@
+#pragma once
+/// \file
+/// A recorded arm sweep: one joint moving while the arm laser scans. Its file format (JSON) is
+/// read and written outside the algorithm modules, by experiments/sweep_io.h.
+
+#include <string>
+#include <vector>
+
+#include "ifab/msgs/msgs.h"
+
+namespace ifab {
+
+struct SweepRecording {
+  std::string name;
+  std::vector<LaserScan> scans;
+  std::vector<JointState> joint_states;
+  std::vector<SyncPulse> sync_pulses;  ///< empty when times are host times already
+};
+
+}  // namespace ifab
