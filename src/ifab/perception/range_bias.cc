@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <unordered_map>
 
 #include "ifab/core/config.h"
@@ -422,7 +423,8 @@ RangeBiasSummary IdentifyRangeBias(const std::vector<CalibrationSweep>& sweeps,
 
 RangeBiasCompensation RangeBiasCompensation::FromConfig(const ConfigNode& c) {
   c.ExpectMap();
-  c.ExpectKeys({"compensate", "normal_radius", "min_neighbours", "max_std_fraction", "sigma_along", "model"});
+  c.ExpectKeys({"compensate", "normal_radius", "min_neighbours", "max_std_fraction", "sigma_along", "incidence",
+                "model_gap", "model"});
   RangeBiasCompensation o;
   c.Read("compensate", o.compensate);
   c.ReadPositive("normal_radius", o.normal_radius);
@@ -430,6 +432,13 @@ RangeBiasCompensation RangeBiasCompensation::FromConfig(const ConfigNode& c) {
   if (o.min_neighbours < 3) c["min_neighbours"].Fail("at least 3 (a plane)");
   c.ReadPositive("max_std_fraction", o.max_std_fraction);
   c.ReadPositive("sigma_along", o.sigma_along);
+  if (auto k = c.Find("incidence")) {
+    const std::string v = k->As<std::string>();
+    if (v == "model") o.incidence_from_model = true;
+    else if (v == "normals") o.incidence_from_model = false;
+    else k->Fail("model or normals");
+  }
+  c.ReadPositive("model_gap", o.model_gap);
   if (auto m = c.Find("model")) o.model = RangeBiasModel::FromConfig(*m);
   return o;
 }
@@ -497,36 +506,79 @@ std::vector<Eigen::Vector3d> EstimateNormals(const std::vector<RayPoint>& cloud,
   return normals;
 }
 
-RangeBiasCompensationStats CompensateRangeBias(std::vector<SweepPoint>& points, const Pose3& T_tool0_laser,
-                                               const RangeBiasCompensation& c) {
-  RangeBiasCompensationStats stats;
-  if (!c.active()) return stats;
-  const std::vector<RayPoint> cloud = ToBaseFrame(points, T_tool0_laser);
+namespace {
+
+// Each point's incidence [rad] (NaN: unknown) and the factor (r - b) / r its range is scaled by
+// (0: dropped), counted into stats.
+std::vector<double> CompensationFactors(const std::vector<RayPoint>& cloud, const RangeBiasCompensation& c,
+                                        const Scene* scene, RangeBiasCompensationStats& stats) {
   const std::vector<Eigen::Vector3d> normals = EstimateNormals(cloud, c.normal_radius, c.min_neighbours, c.sigma_along);
+  const bool use_model = scene && c.incidence_from_model;
   const double max_std = c.max_std_fraction * c.sigma_along;
-  std::vector<SweepPoint> kept;
-  kept.reserve(points.size());
+  std::vector<double> factor(cloud.size(), 0.0);
   double correction = 0.0;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    if (normals[i].isZero()) {
-      ++stats.dropped_no_normal;
-      continue;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const double r = cloud[i].Range();
+    if (!(r > 0.0)) continue;
+    const Eigen::Vector3d d = cloud[i].Ray();
+    double incidence = std::numeric_limits<double>::quiet_NaN();
+    bool from_model = false;
+    if (use_model) {
+      const auto hit = scene->CastRay(cloud[i].origin, d, r + c.model_gap);
+      if (hit && std::abs(hit->t - r) < c.model_gap) {
+        incidence = std::acos(std::min(1.0, std::abs(hit->normal.dot(d))));
+        from_model = true;
+      }
     }
-    const double r = points[i].p_laser.norm();
-    const double incidence = std::acos(std::min(1.0, std::abs(normals[i].dot(cloud[i].Ray()))));
+    if (std::isnan(incidence)) {
+      if (normals[i].isZero()) {
+        ++stats.dropped_no_normal;
+        continue;
+      }
+      incidence = std::acos(std::min(1.0, std::abs(normals[i].dot(d))));
+    }
     if (c.model.Std(r, incidence) > max_std) {
       ++stats.dropped_uncertain;
       continue;
     }
     const double b = c.model.Bias(r, incidence);
-    SweepPoint p = points[i];
-    p.p_laser *= (r - b) / r;
-    kept.push_back(p);
+    factor[i] = (r - b) / r;
     correction -= b;
     ++stats.compensated;
+    if (from_model) ++stats.incidence_from_model;
   }
   if (stats.compensated > 0) stats.mean_correction = correction / stats.compensated;
+  return factor;
+}
+
+}  // namespace
+
+RangeBiasCompensationStats CompensateRangeBias(std::vector<SweepPoint>& points, const Pose3& T_tool0_laser,
+                                               const RangeBiasCompensation& c, const Scene* scene) {
+  RangeBiasCompensationStats stats;
+  if (!c.active()) return stats;
+  const std::vector<double> factor = CompensationFactors(ToBaseFrame(points, T_tool0_laser), c, scene, stats);
+  std::vector<SweepPoint> kept;
+  kept.reserve(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (factor[i] > 0.0) {
+      kept.push_back(points[i]);
+      kept.back().p_laser *= factor[i];
+    }
   points = std::move(kept);
+  return stats;
+}
+
+RangeBiasCompensationStats CompensateRangeBias(std::vector<RayPoint>& cloud, const RangeBiasCompensation& c,
+                                               const Scene* scene) {
+  RangeBiasCompensationStats stats;
+  if (!c.active()) return stats;
+  const std::vector<double> factor = CompensationFactors(cloud, c, scene, stats);
+  std::vector<RayPoint> kept;
+  kept.reserve(cloud.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i)
+    if (factor[i] > 0.0) kept.push_back({cloud[i].origin + factor[i] * (cloud[i].p - cloud[i].origin), cloud[i].origin});
+  cloud = std::move(kept);
   return stats;
 }
 

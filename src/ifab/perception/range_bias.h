@@ -114,9 +114,19 @@ struct RangeBiasCompensation {
   /// there the bias left after compensation is small against the noise every point has anyway.
   double max_std_fraction{0.25};
   double sigma_along{0.018};      ///< [m] range noise
+  /// Where a return's incidence comes from when a model of the targets is at hand (the
+  /// calibration's cube after the joint solve, the workpiece after a first registration): the
+  /// face its ray meets in the model (true), or always the PCA normal of its neighbours (false).
+  /// The neighbourhood (about +-normal_radius) spans two faces near any edge and all of a brick's
+  /// 52 mm side, and the bias is steep in incidence near the normal (cos^n), so normals there bias
+  /// the correction: in the exact world the mount solved on normal-compensated cube sweeps moved
+  /// 1.8 mm along the beam from the joint solve's (README, issue 12).
+  bool incidence_from_model{true};
+  double model_gap{0.05};         ///< [m] a ray's model hit counts when within this of its range
 
   bool active() const { return compensate && !model.empty(); }
-  /// Reads {compensate, normal_radius, min_neighbours, max_std_fraction, sigma_along, model: {...}}.
+  /// Reads {compensate, normal_radius, min_neighbours, max_std_fraction, sigma_along,
+  /// incidence: model | normals, model_gap, model: {...}}.
   static RangeBiasCompensation FromConfig(const ConfigNode& config);
 };
 
@@ -124,6 +134,7 @@ struct RangeBiasCompensationStats {
   int compensated{0};
   int dropped_uncertain{0};  ///< the model's std there is above the guard
   int dropped_no_normal{0};  ///< too few neighbours for an incidence
+  int incidence_from_model{0};  ///< of the compensated: incidence from the model's face
   double mean_correction{0.0};  ///< [m] mean of -b over the compensated points
 };
 
@@ -131,8 +142,15 @@ struct RangeBiasCompensationStats {
 /// incidence from the surface normal of its neighbours (base frame through T_tool0_laser; the
 /// along-ray noise is taken out of the neighbourhood's covariance so the normal is unbiased), and
 /// drop the points the guard rejects.
+/// With `scene` (the targets at their solved poses, base frame) and incidence_from_model, a return
+/// whose ray meets a face of the scene within model_gap of its range takes that face's incidence;
+/// the others keep their PCA normal's.
 RangeBiasCompensationStats CompensateRangeBias(std::vector<SweepPoint>& points, const Pose3& T_tool0_laser,
-                                               const RangeBiasCompensation& compensation);
+                                               const RangeBiasCompensation& compensation,
+                                               const Scene* scene = nullptr);
+/// The same on an assembled cloud (base frame): each point moves along its ray.
+RangeBiasCompensationStats CompensateRangeBias(std::vector<RayPoint>& cloud, const RangeBiasCompensation& compensation,
+                                               const Scene* scene = nullptr);
 
 /// Surface normals (base frame, unit, facing the ray origins) of the points by PCA of the points
 /// within about +-radius (a hash grid's 3x3x3 block of cells); zero where fewer than

@@ -321,10 +321,12 @@ ArmLaserCalibration IdentifyMountAndRangeBias(const std::vector<CalibrationSweep
   out.compensation.model = out.bias->model;
   // The mount again, from the cube sweeps with their ranges compensated and the returns the
   // model is unsure of left out (this replaces a fixed minimum range and incidence).
-  std::vector<CalibrationSweep> compensated = cube_sweeps;
-  for (auto& sw : compensated) CompensateRangeBias(sw.points, out.bias->T_tool0_laser, out.compensation);
+  // Each return's incidence from the cube and ground where the joint solve put them.
   for (std::size_t b = 0; b < solved.size() && b < out.bias->T_base_body.size(); ++b)
     solved[b].T_base_body = out.bias->T_base_body[b];
+  const Scene targets(solved);
+  std::vector<CalibrationSweep> compensated = cube_sweeps;
+  for (auto& sw : compensated) CompensateRangeBias(sw.points, out.bias->T_tool0_laser, out.compensation, &targets);
   if (progress) progress("calibrating the arm laser mount (compensated sweeps)");
   out.mount = CalibrateLaserMount(compensated, solved, out.bias->T_tool0_laser, calibration);
   return out;

@@ -606,11 +606,17 @@ Mission::Sweep Mission::SweepWorkpiece(VisitLog& log, int sweep) {
   }
 
   // Eq. 6, then keep what lies near the workpiece (and the floor around it).
+  // The ranges as read are kept: once the workpiece is registered, each return's incidence comes
+  // from the model's face (Localize); until then from its neighbours' normal.
+  ScanAssemblyOptions as_read = c_.assembly;
+  as_read.range_bias.compensate = false;
   const std::vector<RayPoint> swept =
-      AssembleCloud(arm_scans_, joint_states_, c_.robot, c_.T_tool0_arm_laser, c_.assembly);
+      AssembleCloud(arm_scans_, joint_states_, c_.robot, c_.T_tool0_arm_laser, as_read);
   const Eigen::Vector3d p_stack_base = T_site_base.inverse(Eigen::Isometry) * p_top;
   for (const RayPoint& p : swept)
-    if ((p.p - p_stack_base).head<2>().norm() < o_.crop_radius) out.cloud.push_back(p);
+    if ((p.p - p_stack_base).head<2>().norm() < o_.crop_radius) out.raw_cloud.push_back(p);
+  out.cloud = out.raw_cloud;
+  CompensateRangeBias(out.cloud, c_.assembly.range_bias);
   out.status = SweepStatus::kOk;
   out.t0 = sweep_t0;
   out.t1 = sweep_t1;
@@ -644,6 +650,15 @@ bool Mission::Localize(VisitLog& log) {
       held[3] = held[4] = true;  // roll and pitch, about the base's x and y through the site origin
     }
     SiteLocalization loc = LocalizeInSite(log.cloud, model, guess, c_.registration, true, held);
+    // Range bias with the incidence on the registered model (a brick's 52 mm side is narrower
+    // than the normals' neighbourhood), then register again from there.
+    const RangeBiasCompensation& bias = c_.assembly.range_bias;
+    if (bias.active() && bias.incidence_from_model && loc.IsUsable()) {
+      const ifab::Scene at_registration(SiteBodies(model, loc.T_site_base, true));
+      log.cloud = swept.raw_cloud;
+      CompensateRangeBias(log.cloud, bias, &at_registration);
+      loc = LocalizeInSite(log.cloud, model, loc.T_site_base, c_.registration, true, held);
+    }
     // The stack as built (measure_top): move the model's top brick to the height its top face is
     // seen at, and register again when that moved it by more than twice the measurement's error.
     std::optional<Pose3> top_before;

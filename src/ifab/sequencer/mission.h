@@ -213,6 +213,7 @@ class Mission {
   struct Sweep {
     SweepStatus status{SweepStatus::kRetry};  ///< kRetry: log.failure says why; kStop: stopped safely
     std::vector<RayPoint> cloud;              ///< base frame, cropped to the workpiece
+    std::vector<RayPoint> raw_cloud;          ///< the same before range-bias compensation
     Seconds t0{0.0}, t1{0.0};                 ///< while the laser swept
     Pose3 T_site_base{Pose3::Identity()};     ///< the pose the sweep was planned from
   };

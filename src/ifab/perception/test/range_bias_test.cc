@@ -270,6 +270,75 @@ TEST(RangeBias, CompensationInAssemblyRemovesTheBiasOnAFloor) {
   EXPECT_EQ(AssembleCloud(sweep.scans, sweep.joints, robot, robot.T_tool0_arm_laser, options).size(), raw.size());
 }
 
+// A brick on the floor seen as the mission sees the workpiece (0.8 m away, 50 deg down), the bias
+// steep in incidence near the normal (cos^8, the UTM-30LX's intensity walk). A brick's 52 mm side
+// is narrower than the normals' neighbourhood, so PCA normals there mix the side with the top and
+// the floor; the incidence on the model's face (the brick where it is) does not.
+TEST(RangeBias, IncidenceFromTheModelCompensatesFacesNarrowerThanTheNormalsNeighbourhood) {
+  RigidObject ground{"ground", Pose3::Identity(), {Plane{Eigen::Vector3d::UnitZ(), 0.0}}};
+  RigidObject brick{"brick", Pose3::Identity(), {Box{Eigen::Vector3d(0.24, 0.115, 0.052)}}};
+  const Pose3 T_brick = PoseFromXyzRpy(1.6, 0.0, 0.026, 0.0, 0.0, 0.3);
+  const Scene world({{"ground", Pose3::Identity(), {ground}, true}, {"brick", T_brick, {brick}, true}});
+  RangeBiasModel model;
+  model.range_knots = {0.4, 0.7, 1.0, 1.4};
+  for (int a = 0; a <= 9; ++a) model.incidence_knots.push_back(a * 10.0 * M_PI / 180.0);
+  const int na = static_cast<int>(model.incidence_knots.size());
+  model.coefficients.resize(model.size());
+  for (int r = 0; r < 4; ++r)
+    for (int a = 0; a < na; ++a)
+      model.coefficients[r * na + a] = (-0.02 + 0.005 * r) * std::pow(std::cos(model.incidence_knots[static_cast<std::size_t>(a)]), 8);
+  model.covariance = Eigen::MatrixXd::Identity(model.size(), model.size()) * 1e-8;
+  testing::SyntheticLaser laser = Laser();
+  laser.range_bias = [&](double r, double inc) { return model.Bias(r, inc); };
+  RandomStream rng(11);
+  std::vector<RayPoint> cloud;
+  const Eigen::Vector3d target = T_brick.translation();
+  const Eigen::Vector3d eye = target + 0.8 * Eigen::Vector3d(-std::cos(0.87), 0.0, std::sin(0.87));
+  for (int k = 0; k < 240; ++k) {  // the scan line swept across the brick
+    const double turn = 0.4 * (k / 239.0 - 0.5);
+    Pose3 T_base_laser = LookingAt(eye, target, M_PI / 2);
+    T_base_laser.linear() = ExpSO3(Eigen::Vector3d(0, 0, turn)) * T_base_laser.linear();
+    for (int i = 0; i < laser.beams; ++i) {
+      const double a = laser.angle_min + i * laser.angle_increment;
+      const double r = testing::CastBeam(world, T_base_laser, a, laser, rng);
+      if (!std::isfinite(r) || r < laser.range_min) continue;
+      cloud.push_back({T_base_laser * (r * Eigen::Vector3d(std::cos(a), std::sin(a), 0.0)), T_base_laser.translation()});
+    }
+  }
+  // Mean range error left on the brick's faces (against the noise-free hit along the same ray).
+  const Scene brick_only({{"brick", T_brick, {brick}, true}});
+  auto mean_error_on_brick = [&](const std::vector<RayPoint>& c, int* n) {
+    double sum = 0.0;
+    *n = 0;
+    for (const RayPoint& p : c) {
+      const auto hit = brick_only.CastRay(p.origin, p.Ray(), p.Range() + 0.1);
+      if (!hit || std::abs(hit->t - p.Range()) > 0.05) continue;
+      sum += p.Range() - hit->t;
+      ++*n;
+    }
+    return *n ? sum / *n : 0.0;
+  };
+  RangeBiasCompensation c;
+  c.model = model;
+  int n_raw = 0, n_normals = 0, n_model = 0;
+  const double raw = mean_error_on_brick(cloud, &n_raw);
+  std::vector<RayPoint> by_normals = cloud, by_model = cloud;
+  CompensateRangeBias(by_normals, c);
+  const RangeBiasCompensationStats stats = CompensateRangeBias(by_model, c, &world);
+  const double normals = mean_error_on_brick(by_normals, &n_normals);
+  const double on_model = mean_error_on_brick(by_model, &n_model);
+  ASSERT_GT(n_raw, 3000);  // the noise's 18 mm averages to 0.3 mm
+  EXPECT_LT(raw, -0.001);                       // the bias: a millimetre or more short on the brick
+  EXPECT_GT(stats.incidence_from_model, static_cast<int>(0.9 * stats.compensated));
+  EXPECT_LT(std::abs(on_model), 0.0006);        // the model's incidence: the bias removed
+  EXPECT_GT(std::abs(normals), 0.001);          // the normals: wrong by millimetres (3.3 mm, the wrong way)
+  EXPECT_GT(std::abs(normals), 3.0 * std::abs(on_model));
+  // `incidence: normals` keeps the neighbours' normals even with a model at hand.
+  c.incidence_from_model = false;
+  std::vector<RayPoint> forced = cloud;
+  EXPECT_EQ(CompensateRangeBias(forced, c, &world).incidence_from_model, 0);
+}
+
 TEST(RangeBias, ModelRoundTripsThroughYamlAndRejectsBadKnots) {
   RangeBiasModel m;
   m.range_knots = {0.2, 0.5, 1.0};
