@@ -7,7 +7,9 @@ RUN_ARGS  ?=
 # test-sanitize: the ctest suite with AddressSanitizer + UndefinedBehaviorSanitizer
 # (IFAB_SANITIZE; gcc, the compiler of `make test`, so the tests see the same floating point and the
 # same draws; -O1 with line tables only, which compiles the instrumented code about a fifth faster than -O2 and computes the same floating point (no fast-math at either), no benchmarks, build-sanitize/; without the whole-mission
-# tests, ctest label "mission", which `make test` runs). Any UB report ends its
+# tests, ctest label "mission", which `make test` runs; and four statistical tests skip themselves
+# there, each naming the cheaper test that keeps its code under the sanitizers:
+# src/ifab/core/testing/sanitized.h). Any UB report ends its
 # program (-fno-sanitize-recover=all), failing the test. The fuzz harnesses replay their corpora
 # there. fuzz: libFuzzer needs clang, and coverage everywhere (IFAB_FUZZ), in its own folder
 # (build-fuzz/), so the sanitized test build stays free of the coverage instrumentation that made

@@ -17,12 +17,6 @@ Eigen::Matrix3d ToEigen(const KDL::Rotation& r) {
 
 Eigen::Vector3d ToEigen(const KDL::Vector& v) { return {v.x(), v.y(), v.z()}; }
 
-Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d s;
-  s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return s;
-}
-
 void SetInertia(const KDL::RigidBodyInertia& inertia, ArmLink& link) {
   link.mass = inertia.getMass();
   link.com = ToEigen(inertia.getCOG());

@@ -7,6 +7,7 @@
 namespace ifab {
 
 inline constexpr double kPi = std::numbers::pi;
+inline constexpr double kDeg = kPi / 180.0;  ///< one degree [rad]
 
 /// Wrap an angle to (-pi, pi]. Templated so Ceres Jets pass through.
 template <typename T>

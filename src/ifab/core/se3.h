@@ -23,6 +23,13 @@ Pose3 PoseFromXyzRpy(const std::array<double, 6>& xyzrpy);
 /// (x, y, z, roll, pitch, yaw) of a pose.
 std::array<double, 6> XyzRpyFromPose(const Pose3& pose);
 
+/// The cross-product matrix [v]x: Skew(v) * u == v.cross(u).
+inline Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d s;
+  s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return s;
+}
+
 /// Rotation vector (axis * angle) of a rotation matrix, and back (SO(3) log/exp).
 Eigen::Vector3d LogSO3(const Eigen::Matrix3d& r);
 Eigen::Matrix3d ExpSO3(const Eigen::Vector3d& w);

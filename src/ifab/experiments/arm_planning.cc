@@ -18,7 +18,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-nlohmann::json Run(const RunContext& ctx) {
+nlohmann::json RunArmPlanning(const RunContext& ctx) {
   const ConfigNode& c = *ctx.config;
   const fs::path dir = fs::path(c.file()).parent_path();
   const RobotModel robot = LoadRobotModel((dir / c.Get<std::string>("robot")).string());
@@ -40,7 +40,7 @@ nlohmann::json Run(const RunContext& ctx) {
   return r.results;
 }
 
-std::vector<std::vector<std::string>> Table(const nlohmann::json& r) {
+std::vector<std::vector<std::string>> ArmPlanningTable(const nlohmann::json& r) {
   return {{"motions planned", fmt::format("{}", r["cases"].get<int>()), ""},
           {"converged rate", fmt::format("{:.3f}", r["converged_rate"].get<double>()), ""},
           {"iterations (median)", fmt::format("{:.1f}", r["iterations_median"].get<double>()), "< 5"},
@@ -52,7 +52,7 @@ std::vector<std::vector<std::string>> Table(const nlohmann::json& r) {
 }  // namespace
 
 ExperimentInfo ArmPlanningExperiment() {
-  return {"arm-planning", "paper Sec. IV: iLQG arm plans for brick picking, placing and scan sweeps", Run, Table};
+  return {"arm-planning", "paper Sec. IV: iLQG arm plans for brick picking, placing and scan sweeps", RunArmPlanning, ArmPlanningTable};
 }
 
 }  // namespace ifab::experiments

@@ -19,7 +19,6 @@ using arm::ArmModel;
 using arm::ArmPlan;
 using arm::IkOptions;
 using arm::IlqgOptions;
-using arm::PlanStatus;
 using arm::ArmPrimitives;
 using arm::IkResult;
 using arm::IkSolver;
@@ -250,7 +249,7 @@ ArmPlanningResult RunArmPlanningExperiment(const RobotModel& robot, const ArmPla
     const ArmPlan plan = planner.Plan(c.q_from, c.q_to);
     c.summary = plan.summary;
     const PlanSummary& s = c.summary;
-    converged += s.status == PlanStatus::kConverged;
+    converged += s.status == arm::PlanStatus::kConverged;
     usable += s.IsUsable();
     iterations.push_back(s.iterations);
     plan_ms.push_back(1e3 * s.seconds);

@@ -22,7 +22,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-nlohmann::json Run(const RunContext& ctx) {
+nlohmann::json RunBasePlanning(const RunContext& ctx) {
   const ConfigNode& c = *ctx.config;
   c.ExpectKeys({"seed", "site", "robot", "planner", "cases", "rollout_threads", "sampling"});
   const fs::path dir = fs::path(c.file()).parent_path();
@@ -71,7 +71,7 @@ nlohmann::json Run(const RunContext& ctx) {
   return results;
 }
 
-std::vector<std::vector<std::string>> Table(const nlohmann::json& r) {
+std::vector<std::vector<std::string>> BasePlanningTable(const nlohmann::json& r) {
   return {{"start/goal pairs", fmt::format("{}", r["cases"].get<int>()), ""},
           {"success rate", fmt::format("{:.3f}", r["success_rate"].get<double>()), ""},
           {"plan time median [ms]", fmt::format("{:.1f}", r["plan_ms_median"].get<double>()), "not given"},
@@ -83,7 +83,7 @@ std::vector<std::vector<std::string>> Table(const nlohmann::json& r) {
 }  // namespace
 
 ExperimentInfo BasePlanningExperiment() {
-  return {"base-planning", "paper Sec. III-A: two-phase STOMP base plans between seeded start/goal poses", Run, Table};
+  return {"base-planning", "paper Sec. III-A: two-phase STOMP base plans between seeded start/goal poses", RunBasePlanning, BasePlanningTable};
 }
 
 }  // namespace ifab::experiments

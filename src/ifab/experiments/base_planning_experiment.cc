@@ -13,7 +13,6 @@ namespace {
 
 using base::FootprintChecker;
 using base::PlanResult;
-using base::PlanStatus;
 using base::StompBasePlanner;
 
 double Percentile(std::vector<double> v, double p) {

@@ -304,7 +304,7 @@ Pose3 CalibrateMount(const Setup& setup, std::uint64_t seed, const RunContext& c
 
 namespace {
 
-nlohmann::json Run(const RunContext& ctx) {
+nlohmann::json RunBrickStack(const RunContext& ctx) {
   const auto wall_start = std::chrono::steady_clock::now();
   const ConfigNode& c = *ctx.config;
   Setup setup = LoadSetup(c);
@@ -459,7 +459,7 @@ nlohmann::json Run(const RunContext& ctx) {
   return r;
 }
 
-std::vector<std::vector<std::string>> Table(const nlohmann::json& r) {
+std::vector<std::vector<std::string>> BrickStackTable(const nlohmann::json& r) {
   auto f = [&](const char* key, int digits = 1) { return fmt::format("{:.{}f}", r[key].get<double>(), digits); };
   return {
       {"bricks placed", std::to_string(r["bricks_placed"].get<int>()), "26"},
@@ -573,7 +573,7 @@ ExperimentInfo BaseManeuversExperiment() {
 }
 
 ExperimentInfo BrickStackExperiment() {
-  return {"brick-stack", "paper Sec. VI-VII: 26 bricks, 25 repositionings around a stack (the default)", Run, Table};
+  return {"brick-stack", "paper Sec. VI-VII: 26 bricks, 25 repositionings around a stack (the default)", RunBrickStack, BrickStackTable};
 }
 
 }  // namespace ifab::experiments

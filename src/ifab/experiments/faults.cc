@@ -86,7 +86,7 @@ std::string OutcomeOf(const std::string& incident_kind) {
   return "recovered";
 }
 
-nlohmann::json Run(const RunContext& ctx) {
+nlohmann::json RunFaults(const RunContext& ctx) {
   const auto wall_start = std::chrono::steady_clock::now();
   const ConfigNode& c = *ctx.config;
   c.ExpectKeys({"seed", "mission", "faults_per_run", "max_drive_time", "untrusted_error_mm"});
@@ -263,7 +263,7 @@ ExperimentInfo FaultsExperiment() {
   ExperimentInfo info;
   info.name = "faults";
   info.description = "issue 14: short missions with injected faults; every fault's outcome";
-  info.run = Run;
+  info.run = RunFaults;
   info.summarize = Summarize;
   return info;
 }

@@ -18,7 +18,7 @@
 namespace ifab::experiments {
 namespace {
 
-nlohmann::json Run(const RunContext& ctx) {
+nlohmann::json RunLrfBias(const RunContext& ctx) {
   const ConfigNode& c = *ctx.config;
   c.ExpectKeys({"seed", "laser", "unit", "as_built", "minutes_since_power_on", "heights_m", "scans_per_height",
                 "centre_deg", "reference_deg"});
@@ -98,7 +98,7 @@ nlohmann::json Run(const RunContext& ctx) {
   return {{"heights_m", heights}, {"bump_height_mm", bumps}, {"scans_per_height", scans}, {"laser_unit", unit_info}};
 }
 
-std::vector<std::vector<std::string>> Table(const nlohmann::json& r) {
+std::vector<std::vector<std::string>> LrfBiasTable(const nlohmann::json& r) {
   std::vector<std::vector<std::string>> rows;
   const char* paper[] = {"about 30 (Fig. 7)", "smaller", "smaller still"};
   for (std::size_t i = 0; i < r["heights_m"].size(); ++i)
@@ -110,7 +110,7 @@ std::vector<std::vector<std::string>> Table(const nlohmann::json& r) {
 }  // namespace
 
 ExperimentInfo LrfBiasExperiment() {
-  return {"lrf-bias", "paper Fig. 7: floor scans from 0.4, 1.1, 2.4 m show the short-range bias", Run, Table};
+  return {"lrf-bias", "paper Fig. 7: floor scans from 0.4, 1.1, 2.4 m show the short-range bias", RunLrfBias, LrfBiasTable};
 }
 
 }  // namespace ifab::experiments

@@ -41,7 +41,7 @@ std::string Relative(const ConfigNode& c, const std::string& key) {
 }
 
 // What both experiments share: the simulated machine, the design model and the arm.
-struct Setup {
+struct ConsistencySetup {
   sim::SimOptions sim;
   RobotModel robot;
   arm::ArmOptions arm;
@@ -49,8 +49,8 @@ struct Setup {
   int beam_stride{1};
 };
 
-Setup ReadSetup(const ConfigNode& c) {
-  Setup s;
+ConsistencySetup ReadConsistencySetup(const ConfigNode& c) {
+  ConsistencySetup s;
   const ConfigNode robot_yaml = ConfigNode::LoadFile(Relative(c, "robot_yaml"));
   robot_yaml.ExpectKeys({"feeder_in_base", "sim"});
   s.sim = sim::SimOptions::FromConfig(robot_yaml["sim"]);
@@ -77,11 +77,11 @@ std::array<double, 6> MountDelta(const Pose3& design, const Pose3& T) {
   return {1e3 * t.x(), 1e3 * t.y(), 1e3 * t.z(), RadToDeg(v[3]), RadToDeg(v[4]), RadToDeg(v[5])};
 }
 
-struct Stats {
+struct PoseStats {
   std::array<double, 6> mean{}, std{}, mean_abs_error{};
 };
-Stats Statistics(const std::vector<std::array<double, 6>>& v, const std::array<double, 6>& truth) {
-  Stats s;
+PoseStats Statistics(const std::vector<std::array<double, 6>>& v, const std::array<double, 6>& truth) {
+  PoseStats s;
   const double n = static_cast<double>(v.size());
   for (const auto& x : v)
     for (std::size_t k = 0; k < 6; ++k) {
@@ -99,7 +99,7 @@ json Rpy(const std::array<double, 6>& v) { return {{"roll", v[3]}, {"pitch", v[4
 
 // The simulated robot placed so that the cube truly sits at T_base_cube_true (the plan's
 // cube_in_base is its design placement, which the sweeps aim at).
-std::unique_ptr<sim::SimRobot> CubeSim(const Setup& setup, const sequencer::LaserCalibrationPlan& plan,
+std::unique_ptr<sim::SimRobot> CubeSim(const ConsistencySetup& setup, const sequencer::LaserCalibrationPlan& plan,
                                        const Pose3& T_base_cube_true, std::uint64_t seed) {
   // The cube stands at the site origin; the robot is placed around it.
   const Pose3 T_site_cube = PoseFromXyzRpy(0.0, 0.0, 0.5 * plan.cube_size, 0.0, 0.0, 0.0);
@@ -110,7 +110,7 @@ std::unique_ptr<sim::SimRobot> CubeSim(const Setup& setup, const sequencer::Lase
 }
 
 // One calibration data set: the cube swept as the plan says.
-std::vector<CalibrationSweep> RecordCalibrationSet(const Setup& setup, const sequencer::LaserCalibrationPlan& plan,
+std::vector<CalibrationSweep> RecordCalibrationSet(const ConsistencySetup& setup, const sequencer::LaserCalibrationPlan& plan,
                                                    const Pose3& T_base_cube_true, std::uint64_t seed,
                                                    const RunContext& ctx, const std::string& label,
                                                    const std::string& save_dir, const std::string& file_prefix) {
@@ -134,7 +134,7 @@ json RunRegistrationConsistency(const RunContext& ctx) {
                 "brick_placement_sigma", "guess_error", "sweeps", "passes", "mount", "calibration", "bodies",
                 "registration", "save_sweeps", "laser_noise", "crop_radius", "min_range"});
   const bool save_sweeps = c.Get<bool>("save_sweeps", false);
-  const Setup setup = ReadSetup(c);
+  const ConsistencySetup setup = ReadConsistencySetup(c);
   const std::vector<sequencer::SweepSpec> sweeps = sequencer::ReadSweepSpecs(c["sweeps"]);
   int passes = 2;
   c.ReadPositive("passes", passes);
@@ -256,7 +256,7 @@ json RunRegistrationConsistency(const RunContext& ctx) {
   std::array<double, 6> truth{1e3 * vt[0], 1e3 * vt[1], 1e3 * vt[2], RadToDeg(vt[3]), RadToDeg(vt[4]), RadToDeg(vt[5])};
   // Yaw of a brick is defined modulo 180 deg; bring every estimate next to the truth.
   for (auto& p : poses) p[5] += 180.0 * std::round((truth[5] - p[5]) / 180.0);
-  const Stats st = Statistics(poses, truth);
+  const PoseStats st = Statistics(poses, truth);
   return {{"scans", poses.size()},
           {"std_mm", Xyz(st.std)},
           {"std_deg", Rpy(st.std)},
@@ -297,7 +297,7 @@ json RunCalibrationConsistency(const RunContext& ctx) {
                 "cube_placement_sigma", "datasets", "sweeps", "trials", "initial_guess", "calibration", "jobs",
                 "save_sweeps", "laser_noise", "min_range", "crop_radius"});
   const bool save_sweeps = c.Get<bool>("save_sweeps", false);
-  const Setup setup = ReadSetup(c);
+  const ConsistencySetup setup = ReadConsistencySetup(c);
   sequencer::LaserCalibrationPlan plan;
   plan.sweeps = sequencer::ReadSweepSpecs(c["sweeps"]);
   plan.scan_posture = setup.posture;
@@ -374,7 +374,7 @@ json RunCalibrationConsistency(const RunContext& ctx) {
     const Pose3 mean = AveragePoses(mounts);
     const auto delta = MountDelta(design, mean);
     calibrations.push_back(delta);
-    const Stats trial_stats = Statistics(trial_deltas, delta);
+    const PoseStats trial_stats = Statistics(trial_deltas, delta);
     const double std_mm = std::max({trial_stats.std[0], trial_stats.std[1], trial_stats.std[2]});
     const double std_deg = std::max({trial_stats.std[3], trial_stats.std[4], trial_stats.std[5]});
     worst_trial_std_mm = std::max(worst_trial_std_mm, std_mm);
@@ -399,7 +399,7 @@ json RunCalibrationConsistency(const RunContext& ctx) {
                        delta[0], delta[1], delta[2], delta[3], delta[4], delta[5], std_mm, std_deg);
   }
   const auto truth = MountDelta(design, truth_mount);
-  const Stats st = Statistics(calibrations, truth);
+  const PoseStats st = Statistics(calibrations, truth);
   return {{"datasets", calibrations.size()},
           {"std_mm", Xyz(st.std)},
           {"std_deg", Rpy(st.std)},

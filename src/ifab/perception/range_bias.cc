@@ -53,12 +53,6 @@ std::vector<double> DegToRadAll(std::vector<double> v) {
   return v;
 }
 
-Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return m;
-}
-
 // Left perturbation [dt, w] of a pose: (Exp(w) R, t + dt) (rotation about the frame's parent axes
 // through the pose's own origin).
 Pose3 Perturb(const Pose3& T, const Eigen::Matrix<double, 6, 1>& d) {

@@ -12,16 +12,6 @@
 #include "ifab/perception/pose_solver.h"
 
 namespace ifab {
-namespace {
-
-Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d s;
-  s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return s;
-}
-
-}  // namespace
-
 RegistrationOptions RegistrationOptions::FromConfig(const ConfigNode& c, RegistrationOptions o) {
   c.ExpectKeys({"noise", "noise_source", "gate_sigmas", "fit_tolerance", "convergence", "residual", "max_iterations", "coarse_stride", "max_solver_iterations", "solver", "translation_tolerance",
                 "rotation_tolerance", "shadow_points", "shadow_edge_distance", "shadow_distance", "shadow_sigmas", "max_distance", "max_incidence_deg", "min_incidence_deg",

@@ -3,16 +3,6 @@
 #include <cmath>
 
 namespace ifab {
-namespace {
-
-Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d s;
-  s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return s;
-}
-
-}  // namespace
-
 PoseJacobianData::PoseJacobianData(const double* x, const Eigen::Matrix3d& R0) {
   const Eigen::Vector3d w(x[3], x[4], x[5]);
   R = ExpSO3(w) * R0;

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include "ifab/arm/test/joint_degrees.h"
 #include "ifab/core/angles.h"
 #include "ifab/core/config.h"
 #include "ifab/core/data_path.h"
@@ -10,10 +11,6 @@
 
 namespace ifab::arm {
 namespace {
-
-Vector6d Deg(double a, double b, double c, double d, double e, double f) {
-  return (Vector6d() << a, b, c, d, e, f).finished() * (kPi / 180.0);
-}
 
 class IlqgTest : public ::testing::Test {
  protected:

@@ -2,16 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include "ifab/arm/test/joint_degrees.h"
 #include "ifab/arm/dynamics.h"
 #include "ifab/core/angles.h"
 #include "ifab/core/data_path.h"
 
 namespace ifab::arm {
 namespace {
-
-Vector6d Deg(double a, double b, double c, double d, double e, double f) {
-  return (Vector6d() << a, b, c, d, e, f).finished() * (kPi / 180.0);
-}
 
 // A kinematic stand-in for the robot: the arm jumps to a trajectory's last point when it ends,
 // and the vacuum gripper carries a brick rigidly from the moment it grips.

@@ -20,7 +20,7 @@
 namespace ifab::base {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 void ReadPhase(const ConfigNode& node, StompPhaseOptions* p) {
   node.ExpectKeys({"max_iterations", "min_iterations", "noise_stddev_xy", "noise_stddev_theta", "noise_decay",
@@ -312,7 +312,7 @@ bool ForEachDensePose(const TrajectoryMatrix& q, double step, double radius, F&&
 }  // namespace
 
 double StompBasePlanner::DenseClearance(const TrajectoryMatrix& q) const {
-  double d = kInf;
+  double d = kInfinity;
   ForEachDensePose(q, options_.collision_check_step, checker_.robot().CircumRadius(), [&](const Pose2& p) {
     d = std::min(d, checker_.Clearance(p));
     return true;
@@ -444,7 +444,7 @@ int StompBasePlanner::RunPhase(int phase, TrajectoryMatrix* q, const RandomStrea
       if (lo_p <= 1) lo_p = 0;
       if (hi_p >= n) hi_p = n + 1;
       const auto step_cost = [&](int k) { return ws->prefix[k][hi_p + 1] - ws->prefix[k][lo_p]; };
-      double lo = kInf, hi = -kInf;
+      double lo = kInfinity, hi = -kInfinity;
       for (int k = 0; k < total; ++k) {
         const double sk = step_cost(k);
         lo = std::min(lo, sk);
@@ -763,7 +763,7 @@ PlanResult StompBasePlanner::Plan(const Pose2& start, const Pose2& goal, const R
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return candidate_cost[a] < candidate_cost[b]; });
   const int attempts = std::min<int>(options_.phase2_attempts, static_cast<int>(candidates.size()));
   TrajectoryMatrix best_q;
-  double best_score = kInf;
+  double best_score = kInfinity;
   for (int a = 0; a < attempts; ++a) {
     TrajectoryMatrix qa = candidates[order[a]];
     // (Arguments of a log call are evaluated even when the level is off: these checks are costly.)

@@ -9,10 +9,6 @@
 namespace ifab {
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
-
-RobotModel Robot() { return LoadRobotModel(std::string(IFAB_DATA_DIR) + "/robots/insitu_fabricator.urdf"); }
-
 // The paper's calibration target: a 0.25 m cube on a flat floor, in front of the robot.
 const Pose3 kTrueCube = PoseFromXyzRpy(1.75, 0.08, 0.125, 0.0, 0.0, 0.3);
 
@@ -63,7 +59,7 @@ struct Case {
 class Calibration : public ::testing::TestWithParam<Case> {};
 
 TEST_P(Calibration, RecoversAKnownLaserMount) {
-  const RobotModel robot = Robot();
+  const RobotModel robot = testing::DesignRobot();
   const Pose3 T_design = robot.T_tool0_arm_laser;
   const Pose3 T_true = T_design * PoseFromXyzRpy(0.008, -0.006, 0.01, 1.5 * kDeg, -1.0 * kDeg, 2.0 * kDeg);
   const auto sweeps = Sweeps(robot, T_true, GetParam().noisy, 3, 4);
@@ -88,7 +84,7 @@ TEST_P(Calibration, RecoversAKnownLaserMount) {
 // The paper's way (Ceres autodiff through eq. 6 and 7) and the hand-derived Jacobians give the
 // same calibration.
 TEST(CalibrationDerivatives, AutodiffAndAnalyticAgree) {
-  const RobotModel robot = Robot();
+  const RobotModel robot = testing::DesignRobot();
   const Pose3 T_true = robot.T_tool0_arm_laser * PoseFromXyzRpy(0.004, 0.0, -0.005, 0.01, 0.0, -0.01);
   const auto sweeps = Sweeps(robot, T_true, true, 4, 12);
   const auto bodies = CubeOnGroundBodies(0.25, kTrueCube * PoseFromXyzRpy(0.01, 0.0, 0.0, 0.0, 0.0, 0.02));
@@ -104,7 +100,7 @@ TEST(CalibrationDerivatives, AutodiffAndAnalyticAgree) {
 
 // The normal-equation LM and the Ceres problem give the same mount, poses and covariance.
 TEST(CalibrationSolvers, NormalEquationsAndCeresAgree) {
-  const RobotModel robot = Robot();
+  const RobotModel robot = testing::DesignRobot();
   const Pose3 T_true = robot.T_tool0_arm_laser * PoseFromXyzRpy(0.004, 0.0, -0.005, 0.01, 0.0, -0.01);
   const auto sweeps = Sweeps(robot, T_true, true, 5, 12);
   const auto bodies = CubeOnGroundBodies(0.25, kTrueCube * PoseFromXyzRpy(0.01, 0.0, 0.0, 0.0, 0.0, 0.02));

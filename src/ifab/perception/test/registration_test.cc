@@ -14,8 +14,6 @@
 namespace ifab {
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
-
 // The paper's Table I scene: a brick on the ground.
 const Box kBrick{Eigen::Vector3d(0.240, 0.115, 0.052)};
 

@@ -8,8 +8,6 @@
 namespace ifab {
 namespace {
 
-RobotModel Robot() { return LoadRobotModel(std::string(IFAB_DATA_DIR) + "/robots/insitu_fabricator.urdf"); }
-
 std::vector<RegistrationBody> Floor() {
   RigidObject ground{"ground", Pose3::Identity(), {Plane{Eigen::Vector3d::UnitZ(), 0.0}}};
   return {{"ground", Pose3::Identity(), {ground}, true}};
@@ -18,7 +16,7 @@ std::vector<RegistrationBody> Floor() {
 const Vector6d kLookDown = (Vector6d() << 0.0, 0.3, 0.3, 0.0, 1.2, 0.0).finished();
 
 TEST(ScanAssembly, PutsEveryBeamAtTheArmPoseOfItsOwnTime) {
-  const RobotModel robot = Robot();
+  const RobotModel robot = testing::DesignRobot();
   const Scene world(Floor());
   testing::SyntheticLaser laser;
   laser.noisy = false;
@@ -53,7 +51,7 @@ TEST(ScanAssembly, PutsEveryBeamAtTheArmPoseOfItsOwnTime) {
 }
 
 TEST(ScanAssembly, DropsBeamsOutsideTheJointSamplesAndInvalidRanges) {
-  const RobotModel robot = Robot();
+  const RobotModel robot = testing::DesignRobot();
   LaserScan scan;
   scan.stamp.t = 1.0;
   scan.angle_min = -0.1;

@@ -13,8 +13,6 @@
 namespace ifab {
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
-
 // A 0.6 x 0.45 m board 1.5 m in front of the sensor, facing it (normal along -x), tilted a little.
 const Pose3 kBoardTrue = PoseFromXyzRpy(1.5, 0.1, 0.05, 0.02, 0.06, 0.08);
 

@@ -11,6 +11,7 @@
 #include <limits>
 #include <vector>
 
+#include "ifab/core/data_path.h"
 #include "ifab/core/random.h"
 #include "ifab/model/robot_model.h"
 #include "ifab/msgs/msgs.h"
@@ -19,6 +20,9 @@
 #include "ifab/perception/scene.h"
 
 namespace ifab::testing {
+
+/// The design robot (data/robots/insitu_fabricator.urdf) that the tests scan from.
+inline RobotModel DesignRobot() { return LoadRobotModel(DataPath("robots/insitu_fabricator.urdf")); }
 
 /// A Hokuyo UTM-30LX-like scanner.
 struct SyntheticLaser {

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include "ifab/sim/test/default_options.h"
 #include <set>
 
 #include "ifab/core/data_path.h"
@@ -10,8 +11,6 @@
 
 namespace ifab::sim {
 namespace {
-
-SimOptions Default() { return SimOptions::Load(DataPath("sim/insitu_fabricator.yaml")); }
 
 FaultSpec Spec(FaultKind kind, double drive_time, double duration = 0.0, double magnitude = 0.0) {
   FaultSpec f;
@@ -24,7 +23,7 @@ FaultSpec Spec(FaultKind kind, double drive_time, double duration = 0.0, double 
 
 TEST(Faults, ABaseLaserBlackoutSilencesTheLaserWhileDriving) {
   FaultInjector faults({Spec(FaultKind::kBaseLaserBlackout, 0.5, 2.0)});
-  SimRobot robot(Default(), Pose2(0, 0, 0), Vector6d::Zero(), 1);
+  SimRobot robot(DefaultOptions(), Pose2(0, 0, 0), Vector6d::Zero(), 1);
   robot.SetFaults(&faults);
   robot.Wait(1.0);  // standing: no driving time, no blackout
   EXPECT_GE(robot.TakeLaserScans(DeviceId::kBaseLaser).size(), 35u);
@@ -44,7 +43,7 @@ TEST(Faults, AClockJumpShiftsOnlyThatDevicesStamps) {
   f.device = DeviceId::kGyro;
   auto run = [&](bool with) {
     FaultInjector faults({f});
-    SimRobot robot(Default(), Pose2(0, 0, 0), Vector6d::Zero(), 2);
+    SimRobot robot(DefaultOptions(), Pose2(0, 0, 0), Vector6d::Zero(), 2);
     if (with) robot.SetFaults(&faults);
     robot.CommandTracks({0.0, 0.1, 0.1});
     robot.Wait(0.5);
@@ -59,7 +58,7 @@ TEST(Faults, TheArmControllerRejectsTheChosenTrajectoryOnly) {
   FaultSpec f = Spec(FaultKind::kArmTrajectoryRejected, 0.0);
   f.index = 2;
   FaultInjector faults({f});
-  SimRobot robot(Default(), Pose2(0, 0, 0), Vector6d::Zero(), 3);
+  SimRobot robot(DefaultOptions(), Pose2(0, 0, 0), Vector6d::Zero(), 3);
   robot.SetFaults(&faults);
   JointTrajectory t;
   t.points.resize(2);
@@ -79,7 +78,7 @@ TEST(Faults, ABumpMovesEveryBrickOfTheStack) {
   FaultSpec f = Spec(FaultKind::kStackBumped, 0.1, 0.0, 0.02);
   f.angle = 0.0;
   FaultInjector faults({f});
-  SimRobot robot(Default(), Pose2(0, 0, 0), Vector6d::Zero(), 4);
+  SimRobot robot(DefaultOptions(), Pose2(0, 0, 0), Vector6d::Zero(), 4);
   SiteBox b;
   b.box.size = {0.24, 0.115, 0.052};
   b.T_site_box = PoseFromXyzRpy(1, 2, 0.026, 0, 0, 0);

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include "ifab/sim/test/default_options.h"
 #include <cstring>
 
 #include "ifab/core/angles.h"
@@ -10,10 +11,8 @@
 namespace ifab::sim {
 namespace {
 
-SimOptions Default() { return SimOptions::Load(DataPath("sim/insitu_fabricator.yaml")); }
-
 TEST(SimRobot, SameSeedGivesByteIdenticalScans) {
-  const SimOptions o = Default();
+  const SimOptions o = DefaultOptions();
   auto scans = [&](std::uint64_t seed) {
     SimRobot robot(o, Pose2(1.5, 0.3, 2.8), Vector6d::Zero(), seed);
     robot.CommandTracks({0.0, 0.2, 0.25});
@@ -32,7 +31,7 @@ TEST(SimRobot, SameSeedGivesByteIdenticalScans) {
 }
 
 TEST(SimRobot, SlipMakesDrivingDifferFromIdealKinematics) {
-  const SimOptions o = Default();
+  const SimOptions o = DefaultOptions();
   SimRobot robot(o, Pose2(0, 0, 0), Vector6d::Zero(), 3);
   // Ideal differential drive: a left turn of (v_r - v_l) / B for 10 s after the lag.
   const double vl = 0.1, vr = 0.2, B = o.tracks.track_gauge;
@@ -52,7 +51,7 @@ TEST(SimRobot, SlipMakesDrivingDifferFromIdealKinematics) {
 }
 
 TEST(SimRobot, GyroMeasuresTheYawRateWithNoise) {
-  SimRobot robot(Default(), Pose2(0, 0, 0), Vector6d::Zero(), 4);
+  SimRobot robot(DefaultOptions(), Pose2(0, 0, 0), Vector6d::Zero(), 4);
   robot.CommandTracks({0.0, -0.1, 0.1});
   robot.Wait(3.0);
   robot.TakeGyroSamples();
@@ -70,7 +69,7 @@ TEST(SimRobot, GyroMeasuresTheYawRateWithNoise) {
 }
 
 TEST(SimRobot, ArmFollowsATrajectoryAndReportsJointStates) {
-  SimRobot robot(Default(), Pose2(0, 0, 0), Vector6d::Zero(), 5);
+  SimRobot robot(DefaultOptions(), Pose2(0, 0, 0), Vector6d::Zero(), 5);
   JointTrajectory traj;
   Vector6d goal = Vector6d::Zero();
   goal[0] = 0.5;
@@ -89,7 +88,7 @@ TEST(SimRobot, ArmFollowsATrajectoryAndReportsJointStates) {
 }
 
 TEST(SimRobot, PickAndReleaseABrickSettlesItOnTheGround) {
-  SimRobot robot(Default(), Pose2(0, 0, 0), Vector6d::Zero(), 6);
+  SimRobot robot(DefaultOptions(), Pose2(0, 0, 0), Vector6d::Zero(), 6);
   EXPECT_FALSE(robot.holding_brick());
   robot.SetGripper(true);  // far from the feeder: nothing to grip
   EXPECT_FALSE(robot.holding_brick());

@@ -15,7 +15,7 @@ namespace {
 using ::testing::HasSubstr;
 
 const std::string kData = ESTIMATOR_TEST_DATA;
-using testing::ErrorOf;
+using ::ifab::testing::ErrorOf;
 
 TEST(CarmenLog, ReadsFlaserRobotlaserAndOdomAndSkipsTheRest) {
   const CarmenLog log = ReadCarmenLog(kData + "/good.clf");

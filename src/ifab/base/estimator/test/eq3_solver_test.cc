@@ -10,8 +10,8 @@ namespace ifab::base {
 namespace {
 
 // A keyframe of `world` at the origin and a measurement scan from T_true.
-struct MatchSetup {
-  MatchSetup(const testing::World& world, const Pose2& T_true, EstimatorOptions options)
+struct Eq3Setup {
+  Eq3Setup(const testing::World& world, const Pose2& T_true, EstimatorOptions options)
       : o(std::move(options)), pre(o, Pose2()), map(o), scan(o), solver(o) {
     pre.Extract(testing::CastScan(world, Pose2(), 0.0));
     map.Add(Pose2(), 0.0, &pre);
@@ -32,7 +32,7 @@ TEST(Eq3Solver, RecoversTheMotionFromAnOffsetStart) {
   EstimatorOptions o;
   o.coarse_sigmas = {0.15};
   const Pose2 T_true(0.12, -0.07, DegToRad(3.0));
-  MatchSetup s(testing::LRoom(), T_true, o);
+  Eq3Setup s(testing::LRoom(), T_true, o);
   Eq3Problem p;  // predicted at the origin, no gyro
   const Eq3Result r = s.Solve(p);
   ASSERT_FALSE(r.failed);
@@ -46,7 +46,7 @@ TEST(Eq3Solver, TheGyroTermHoldsTheHeading) {
   // In a circular room the scan says nothing about the heading: the gyro decides it.
   EstimatorOptions o;
   const Pose2 T_true(0.02, 0.01, DegToRad(2.0));
-  MatchSetup s(testing::RegularRoom(720, 3.0), T_true, o);
+  Eq3Setup s(testing::RegularRoom(720, 3.0), T_true, o);
   Eq3Problem p;
   p.x_pred = Eigen::Vector3d(0.0, 0.0, DegToRad(1.5));  // the gyro's heading
   p.use_gyro = true;
@@ -64,7 +64,7 @@ TEST(Eq3Solver, AnInformativePriorDecidesTheCorridorAxisTheWeakPullDoesNot) {
   p.x_pred = Eigen::Vector3d(0.25, 0.0, 0.0);
   p.use_gyro = true;
   {
-    MatchSetup s(testing::Corridor(), T_true, o);
+    Eq3Setup s(testing::Corridor(), T_true, o);
     const Eq3Result r = s.Solve(p);
     ASSERT_FALSE(r.failed);
     EXPECT_NEAR(r.x[1], T_true.y, 2e-3);  // across: the scan
@@ -72,7 +72,7 @@ TEST(Eq3Solver, AnInformativePriorDecidesTheCorridorAxisTheWeakPullDoesNot) {
     EXPECT_GT(std::abs(r.x[0] - T_true.x), 0.02);
   }
   {
-    MatchSetup s(testing::Corridor(), T_true, o);
+    Eq3Setup s(testing::Corridor(), T_true, o);
     p.informative = true;
     p.info_prior = Eigen::Vector3d(1.0 / (0.002 * 0.002), 1.0, 1.0 / 1e-6).asDiagonal();  // 2 mm along, 1 m across
     p.x_pred = Eigen::Vector3d(0.29, 0.0, 0.0);
@@ -85,7 +85,7 @@ TEST(Eq3Solver, AnInformativePriorDecidesTheCorridorAxisTheWeakPullDoesNot) {
 
 TEST(Eq3Cost, HandsTheSolverTheGradientAndHessianOfTheFullProblem) {
   EstimatorOptions o;
-  MatchSetup s(testing::LRoom(), Pose2(0.02, 0.01, 0.01), o);
+  Eq3Setup s(testing::LRoom(), Pose2(0.02, 0.01, 0.01), o);
   s.pre.Thin(o.min_point_spacing, 1e9, o.max_points, &s.scan.meas_base);
   s.scan.Associate(s.map, Pose2(), 0, o.search_radius_sigmas * std::sqrt(2.0) * o.sigma);
   Eq3Cost cost;
