@@ -1,7 +1,9 @@
 # Fails if an algorithm module includes a simulator header, if its link line (as CMake generated
 # it) names the sim or experiments library, or if an algorithm-side loader opens the simulator's
 # parameters: a path under data/sim/, a `sim:` section of a config, or the as-built tolerances
-# (the stack reads design files only, DESIGN.md "The world and the model"). Run by ctest.
+# (the stack reads design files only, DESIGN.md "The world and the model"), or if an algorithm
+# module's own (non-test) code opens a file for writing: algorithm modules write no files
+# (issue 12); experiments/ and app/ save their results. Run by ctest.
 set(algorithms core msgs model hal sync base arm perception sequencer)
 set(bad "")
 foreach(m IN LISTS algorithms)
@@ -16,6 +18,13 @@ foreach(m IN LISTS algorithms)
     if(opens)
       list(APPEND bad "${f} opens the simulator's parameters: ${opens}")
     endif()
+    # Writing files: an output stream or C file opened by path (tests and their helpers may).
+    if(NOT f MATCHES "/(test|testing)/")
+      file(STRINGS "${f}" writes REGEX "std::(o|)fstream[ >]|fopen *\\(|FILE *\\*")
+      if(writes)
+        list(APPEND bad "${f} writes a file: ${writes}")
+      endif()
+    endif()
   endforeach()
   # The transitive link closure of the module's library, written at configure time.
   set(links_file "${BINARY_DIR}/layering/ifab_${m}.links")
@@ -29,6 +38,6 @@ foreach(m IN LISTS algorithms)
   endif()
 endforeach()
 if(bad)
-  message(FATAL_ERROR "Layering violations (algorithm modules must not see the simulator):\n${bad}")
+  message(FATAL_ERROR "Layering violations (algorithm modules must not see the simulator, nor write files):\n${bad}")
 endif()
-message(STATUS "layering ok: no algorithm module includes or links sim/ or experiments/")
+message(STATUS "layering ok: no algorithm module includes or links sim/ or experiments/, or writes a file")

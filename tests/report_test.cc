@@ -12,6 +12,7 @@
 #include "ifab/experiments/progress.h"
 #include "ifab/experiments/report.h"
 #include "ifab/experiments/results_table.h"
+#include "ifab/experiments/ply_file.h"
 #include "ifab/perception/ply.h"
 
 namespace ifab::experiments {
@@ -53,7 +54,7 @@ TEST(Report, InlinesTheBundleAndTheRunsDataAndKeepsScriptsClosed) {
     label.values.push_back(i % 2);
   }
   cloud.fields.push_back(label);
-  WritePly((dir / "cloud_visit_01.ply").string(), cloud);
+  SavePly((dir / "cloud_visit_01.ply").string(), cloud);
   const fs::path bundle = dir / "bundle.js";
   Write(bundle, "window.x = '</script>';");
   ReportOptions o;

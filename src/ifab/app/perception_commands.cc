@@ -17,6 +17,7 @@
 #include "ifab/model/robot_model.h"
 #include "ifab/model/site.h"
 #include "ifab/perception/calibration.h"
+#include "ifab/experiments/ply_file.h"
 #include "ifab/perception/ply.h"
 #include "ifab/perception/registration.h"
 #include "ifab/perception/scan_assembly.h"
@@ -303,7 +304,7 @@ json RegisterCommand(const RegisterCommandOptions& o) {
   }
   labelled.SetField("label", std::move(label));
   labelled.SetField("body", std::move(body));
-  WritePly((std::filesystem::path(o.out_dir) / "labelled.ply").string(), labelled);
+  SavePly((std::filesystem::path(o.out_dir) / "labelled.ply").string(), labelled);
   j["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   j["solve_seconds"] = s.seconds;
   WriteJson((std::filesystem::path(o.out_dir) / "registration.json").string(), j);

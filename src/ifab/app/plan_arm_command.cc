@@ -13,6 +13,7 @@
 #include "ifab/core/data_path.h"
 #include "ifab/core/error.h"
 #include "ifab/core/parse.h"
+#include "ifab/experiments/atomic_file.h"
 #include "ifab/model/robot_model.h"
 
 namespace ifab::app {
@@ -81,8 +82,7 @@ void AddPlanArmCommand(CLI::App& app, int& exit_code) {
       std::cout << s.BriefReport() << "\n";
     }
     if (!args->trajectory.empty()) {
-      std::ofstream out(args->trajectory);
-      if (!out) ThrowInputError("--trajectory: cannot write '{}'", args->trajectory);
+      experiments::AtomicOfstream out(args->trajectory);
       out << "t,q1,q2,q3,q4,q5,q6,qd1,qd2,qd3,qd4,qd5,qd6,tau1,tau2,tau3,tau4,tau5,tau6\n";
       for (std::size_t k = 0; k < plan.trajectory.points.size(); ++k) {
         const auto& p = plan.trajectory.points[k];
@@ -93,6 +93,7 @@ void AddPlanArmCommand(CLI::App& app, int& exit_code) {
         for (int i = 0; i < 6; ++i) out << fmt::format(",{:.4f}", tau[i]);
         out << "\n";
       }
+      out.Commit();
     }
     exit_code = s.IsUsable() ? 0 : 1;
   });

@@ -14,6 +14,7 @@
 #include "ifab/core/data_path.h"
 #include "ifab/core/error.h"
 #include "ifab/core/parse.h"
+#include "ifab/experiments/atomic_file.h"
 #include "ifab/model/site.h"
 
 namespace ifab::app {
@@ -88,7 +89,9 @@ void AddPlanBaseCommand(CLI::App& app, int& exit_code) {
       if (!r.IsUsable()) {
         std::cerr << "ifab: plan-base: the plan is not usable; writing the best attempt for inspection\n";
       }
-      r.trajectory.WriteCsv(args->trajectory);
+      experiments::AtomicOfstream out(args->trajectory);
+      r.trajectory.WriteCsv(out);
+      out.Commit();
     }
     exit_code = r.IsUsable() ? 0 : 1;
   });

@@ -23,6 +23,7 @@
 #include "ifab/experiments/experiments.h"
 #include "ifab/perception/calibration.h"
 #include "ifab/experiments/perception_json.h"
+#include "ifab/experiments/ply_file.h"
 #include "ifab/perception/ply.h"
 #include "ifab/perception/registration.h"
 #include "ifab/perception/scan_assembly.h"
@@ -247,7 +248,7 @@ json RunRegistrationConsistency(const RunContext& ctx) {
         std::vector<double> label(cloud.size());
         for (std::size_t i = 0; i < cloud.size(); ++i) label[i] = s.point_body[i] == static_cast<int>(bodies.size()) - 1 ? 1 : 0;
         pc.SetField("on_brick", std::move(label));
-        WritePly((fs::path(ctx.out_dir) / "registration_scan_1.ply").string(), pc);
+        SavePly((fs::path(ctx.out_dir) / "registration_scan_1.ply").string(), pc);
       }
     }
   }

@@ -8,6 +8,7 @@
 
 #include "ifab/core/error.h"
 #include "ifab/perception/cloud.h"
+#include "ifab/experiments/ply_file.h"
 #include "ifab/perception/ply.h"
 
 namespace ifab::experiments {
@@ -138,7 +139,7 @@ void WriteVisitCloud(const std::string& path, const sequencer::VisitLog& log) {
     for (PointLabel l : log.cloud_labels) label.values.push_back(static_cast<double>(l));
     cloud.fields.push_back(std::move(label));
   }
-  WritePly(path, cloud);
+  SavePly(path, cloud);
 }
 
 }  // namespace ifab::experiments

@@ -318,11 +318,4 @@ void WritePly(std::ostream& out, const PointCloud& cloud, const PlyWriteOptions&
   }
 }
 
-void WritePly(const std::string& path, const PointCloud& cloud, const PlyWriteOptions& options) {
-  std::ofstream out(path, std::ios::binary);
-  if (!out) ThrowInputError("{}: cannot open for writing", path);
-  WritePly(out, cloud, options);
-  if (!out) ThrowInputError("{}: write failed", path);
-}
-
 }  // namespace ifab

@@ -26,8 +26,7 @@ PointCloud ReadPly(const std::string& path);
 /// Read PLY data from a stream; `name` stands for the file in messages.
 PointCloud ReadPly(std::istream& in, const std::string& name);
 
-/// Write a PLY file. Throws InputError if it cannot be written.
-void WritePly(const std::string& path, const PointCloud& cloud, const PlyWriteOptions& options = {});
+/// Write PLY data to a stream. (The module writes no files: experiments/ply_file.h saves one.)
 void WritePly(std::ostream& out, const PointCloud& cloud, const PlyWriteOptions& options = {});
 
 }  // namespace ifab

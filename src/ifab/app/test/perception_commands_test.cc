@@ -12,6 +12,7 @@
 #include "ifab/core/random.h"
 #include "ifab/model/site.h"
 #include "ifab/perception/calibration.h"
+#include "ifab/experiments/ply_file.h"
 #include "ifab/perception/ply.h"
 #include "ifab/perception/registration.h"
 #include "ifab/experiments/perception_json.h"
@@ -65,7 +66,7 @@ TEST(RegisterCommand, LocalizesTheRobotFromAPlyCloudOfTheStack) {
   std::vector<RayPoint> cloud_site = testing::SynthesizeCloud(world, laser_in_site, 0.0, 2.3, laser, rng);
   std::vector<RayPoint> cloud_base;
   for (const auto& p : cloud_site) cloud_base.push_back({T_site_base.inverse() * p.p, T_site_base.inverse() * p.origin});
-  WritePly((dir / "cloud.ply").string(), ToPointCloud(cloud_base));
+  SavePly((dir / "cloud.ply").string(), ToPointCloud(cloud_base));
 
   RegisterCommandOptions o;
   o.cloud_path = (dir / "cloud.ply").string();
@@ -116,7 +117,7 @@ TEST(RegisterCommand, APartialConfigKeepsTheOtherDefaults) {
     return T;
   };
   const std::vector<RayPoint> cloud = testing::SynthesizeCloud(world, at, 0.0, 1.0, laser, rng);
-  WritePly((dir / "cloud.ply").string(), ToPointCloud(cloud));
+  SavePly((dir / "cloud.ply").string(), ToPointCloud(cloud));
   Write(dir / "partial.yaml", "registration: {max_iterations: 40}\n");
   Write(dir / "guess.yaml", "boxes:\n  - {name: crate, size: [0.5, 0.4, 0.3], xyz: [1.52, 0.09, 0.01], rpy_deg: [1, 0, 27]}\n");
   RegisterCommandOptions o;

@@ -2,9 +2,7 @@
 
 #include <fmt/format.h>
 
-#include <fstream>
-
-#include "ifab/core/error.h"
+#include <ostream>
 
 namespace ifab::base {
 
@@ -14,16 +12,13 @@ double BaseTrajectory::Length() const {
   return l;
 }
 
-void BaseTrajectory::WriteCsv(const std::string& path) const {
-  std::ofstream out(path);
-  IFAB_THROW_UNLESS(static_cast<bool>(out), "{}: cannot open for writing", path);
+void BaseTrajectory::WriteCsv(std::ostream& out) const {
   out << "index,x,y,theta,v,omega\n";
   for (std::size_t i = 0; i < points.size(); ++i) {
     const Point& p = points[i];
     out << fmt::format("{},{:.6f},{:.6f},{:.6f},{:.6f},{:.6f}\n", i, p.pose.x, p.pose.y, p.pose.theta, p.v,
                        p.omega);
   }
-  IFAB_THROW_UNLESS(static_cast<bool>(out), "{}: write failed", path);
 }
 
 }  // namespace ifab::base

@@ -3,6 +3,7 @@
 /// The planned base trajectory as the controller consumes it (paper Sec. III-C): a
 /// time-independent sequence of 2D poses, each with the nominal linear and angular velocity.
 
+#include <iosfwd>
 #include <string>
 #include <vector>
 
@@ -24,8 +25,9 @@ struct BaseTrajectory {
   /// Path length of the translation [m].
   double Length() const;
 
-  /// CSV with header "index,x,y,theta,v,omega" (SI units); throws InputError if unwritable.
-  void WriteCsv(const std::string& path) const;
+  /// CSV with header "index,x,y,theta,v,omega" (SI units), to a stream (the module writes no
+  /// files; `ifab plan-base --trajectory` saves it).
+  void WriteCsv(std::ostream& out) const;
 };
 
 }  // namespace ifab::base

@@ -42,7 +42,10 @@ TEST(Ply, RoundTripsEveryFormatAndPrecision) {
 
 TEST(Ply, WritesAndReadsFiles) {
   const std::string path = (std::filesystem::temp_directory_path() / "ifab_ply_test.ply").string();
-  WritePly(path, Sample());
+  {
+    std::ofstream out(path, std::ios::binary);
+    WritePly(out, Sample());
+  }
   ExpectSame(ReadPly(path), Sample(), 1e-6);
   std::filesystem::remove(path);
 }
