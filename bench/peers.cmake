@@ -5,7 +5,7 @@
 find_package(Open3D QUIET)
 find_package(ompl QUIET)
 if(Open3D_FOUND AND TARGET Open3D::Open3D AND (ompl_FOUND OR OMPL_FOUND))
-  add_executable(peers peers.cc)
+  add_executable(peers EXCLUDE_FROM_ALL peers.cc)  # built by `make bench-peers` only
   target_link_libraries(peers PRIVATE ifab::experiments ifab::perception ifab::base_planner_site ifab::arm Open3D::Open3D)
   if(TARGET ompl::ompl)
     target_link_libraries(peers PRIVATE ompl::ompl)

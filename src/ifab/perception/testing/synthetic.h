@@ -39,6 +39,9 @@ struct SyntheticLaser {
   double mixed_gap{0.03};    ///< [m] range difference across the beam that makes a mixed pixel
   /// Range bias b(range, incidence) added to every return (positive: reads long); unset: none.
   std::function<double(double, double)> range_bias;
+  /// Noise along the ray sigma(range, incidence) [m] (e.g. a simulated unit's range- and
+  /// incidence-dependent law); unset: noise.sigma_along at every range.
+  std::function<double(double, double)> sigma_along_at;
 };
 
 /// One beam from the laser pose along angle a (laser frame x-y plane). NaN if nothing is hit.
@@ -62,18 +65,19 @@ inline double CastBeam(const Scene& world, const Pose3& T_base_laser, double a, 
       return std::min(r1, r2) + rng.Uniform(0.15, 0.85) * std::abs(r1 - r2);
     }
   }
-  double bias = 0.0;
-  if (laser.range_bias) {
+  double bias = 0.0, incidence = 0.0;
+  if (laser.range_bias || laser.sigma_along_at) {
     const Eigen::Vector3d d = T_base_laser.linear() * Eigen::Vector3d(std::cos(a), std::sin(a), 0.0);
     const auto hit = world.CastRay(o, d, laser.range_max);
-    bias = laser.range_bias(r0, std::acos(std::min(1.0, std::abs(hit->normal.dot(d)))));
+    incidence = std::acos(std::min(1.0, std::abs(hit->normal.dot(d))));
+    if (laser.range_bias) bias = laser.range_bias(r0, incidence);
   }
   if (!laser.noisy) return r0 + bias;
   // Elevation noise first, then azimuth: gcc's order of the call's arguments (C++ leaves it open).
   const double de = rng.Normal(beam), da = rng.Normal(beam);
   double r = cast(a + da, de);
   if (!std::isfinite(r)) r = r0;
-  return r + bias + rng.Normal(laser.noise.sigma_along);
+  return r + bias + rng.Normal(laser.sigma_along_at ? laser.sigma_along_at(r0, incidence) : laser.noise.sigma_along);
 }
 
 /// A scan starting at t0; the laser pose is evaluated at each beam's own time.
