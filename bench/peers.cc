@@ -208,6 +208,8 @@ void RegistrationInformationRows(int count) {
   variants.back().options.loss = RobustLoss::kNone;
   variants.push_back({"max_distance 0.5 m (instead of 0.15)", base, false});
   variants.back().options.max_distance = 0.5;
+  variants.push_back({"the noise scale estimated from the residuals (noise_source: estimated)", base, false});
+  variants.back().options.noise_source = NoiseSource::kEstimated;
   variants.push_back({"the whole sweep (no crop)", base, true});
   std::puts("| ifab variant | points / inliers (median) | error median / worst [mm] | predicted median [mm] | error / predicted (median) | time median [ms] |");
   std::puts("|---|---|---|---|---|---|");
