@@ -126,6 +126,7 @@ std::vector<Sweep> MakeSweeps(int count) {
                                         {1.1, 1.6, DegToRad(-124.5)},
                                         {1.9, -0.3, DegToRad(171.0)}};
   RandomStream rng(20260101);
+  const testing::SyntheticLaser laser = ArmLaser();  // loads its YAML once, not per sweep
   std::vector<Sweep> out;
   for (int v = 0; v < count; ++v) {
     // Visit v + 1 of the mission: the stack has v + 2 bricks (one placed per visit, 26 in all).
@@ -175,7 +176,6 @@ std::vector<Sweep> MakeSweeps(int count) {
       T_site_laser.translation() = p_laser;
       return Pose3(T_base_site * T_site_laser);
     };
-    const testing::SyntheticLaser laser = ArmLaser();
     const std::vector<RayPoint> swept = testing::SynthesizeCloud(world, laser_at, 0.0, 3.0, laser, rng);
     s.p_stack_base = T_base_site * p_top;
     for (const RayPoint& p : swept)

@@ -55,8 +55,11 @@ inline double CastBeam(const Scene& world, const Pose3& T_base_laser, double a, 
     const auto hit = world.CastRay(o, T_base_laser.linear() * d_laser, laser.range_max);
     return hit ? hit->t : std::numeric_limits<double>::quiet_NaN();
   };
-  const double r0 = cast(a, 0.0);
-  if (!std::isfinite(r0)) return r0;
+  // The beam's own ray, kept whole: its face's normal gives the incidence for the bias and noise.
+  const Eigen::Vector3d d0 = T_base_laser.linear() * Eigen::Vector3d(std::cos(a), std::sin(a), 0.0);
+  const auto hit0 = world.CastRay(o, d0, laser.range_max);
+  if (!hit0) return std::numeric_limits<double>::quiet_NaN();
+  const double r0 = hit0->t;
   const double beam = laser.noise.SigmaAcross(r0) / r0;  // angular beam-width sigma
   if (laser.mixed_pixels) {
     const double r1 = cast(a - 2.0 * beam, 0.0), r2 = cast(a + 2.0 * beam, 0.0);
@@ -67,9 +70,7 @@ inline double CastBeam(const Scene& world, const Pose3& T_base_laser, double a, 
   }
   double bias = 0.0, incidence = 0.0;
   if (laser.range_bias || laser.sigma_along_at) {
-    const Eigen::Vector3d d = T_base_laser.linear() * Eigen::Vector3d(std::cos(a), std::sin(a), 0.0);
-    const auto hit = world.CastRay(o, d, laser.range_max);
-    incidence = std::acos(std::min(1.0, std::abs(hit->normal.dot(d))));
+    incidence = std::acos(std::min(1.0, std::abs(hit0->normal.dot(d0))));
     if (laser.range_bias) bias = laser.range_bias(r0, incidence);
   }
   if (!laser.noisy) return r0 + bias;
