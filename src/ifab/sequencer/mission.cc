@@ -28,7 +28,7 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
   c.ExpectKeys({"control_period", "drive_timeout_factor", "drive_timeout_margin", "settle_time", "plan_attempts",
                 "max_sweeps", "min_inliers", "max_localization_std_m", "max_localization_std_deg",
                 "max_localization_jump_m", "scan_distance", "scan_elevation_deg", "sweep_half_angle_deg",
-                "sweep_speed_deg_s", "crop_radius", "park_joints_deg", "localize", "place_bricks", "measure_top", "full_covariance_prior", "max_reapproaches",
+                "sweep_speed_deg_s", "crop_radius", "park_joints_deg", "localize", "place_bricks", "measure_top", "measure_footprint", "brick_size_sigma_mm", "full_covariance_prior", "max_reapproaches",
                 "reapproach_tolerance", "reapproach_distance", "reapproach_speed", "tilt_compensation", "tilt_settle",
                 "tilt_window", "attitude_prior_deg", "height_prior_m", "registration_attitude", "imu_tilt_sigma_deg", "check_placement", "placement_correction", "min_brick_inliers", "max_scan_gap",
                 "sensor_wait_timeout", "protective_field", "protective_field_points", "protective_field_margin",
@@ -53,6 +53,12 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
   c.Read("localize", o.localize);
   c.Read("place_bricks", o.place_bricks);
   c.Read("measure_top", o.measure_top);
+  c.Read("measure_footprint", o.measure_footprint);
+  if (auto v = c.Find("brick_size_sigma_mm")) {
+    const auto sigma = v->AsNumbers(2);
+    if (!(sigma[0] > 0.0 && sigma[1] > 0.0)) v->Fail("two positive numbers (length and width) [mm]");
+    o.brick_size_sigma = 1e-3 * Eigen::Vector2d(sigma[0], sigma[1]);
+  }
   c.Read("full_covariance_prior", o.full_covariance_prior);
   c.ReadNonNegative("max_reapproaches", o.max_reapproaches);
   c.ReadPositive("reapproach_tolerance", o.reapproach_tolerance);
@@ -615,6 +621,7 @@ Mission::Sweep Mission::SweepWorkpiece(VisitLog& log, int sweep) {
   const Eigen::Vector3d p_stack_base = T_site_base.inverse(Eigen::Isometry) * p_top;
   for (const RayPoint& p : swept)
     if ((p.p - p_stack_base).head<2>().norm() < o_.crop_radius) out.raw_cloud.push_back(p);
+  if (o_.measure_footprint) out.uncropped = swept;
   out.cloud = out.raw_cloud;
   CompensateRangeBias(out.cloud, c_.assembly.range_bias);
   out.status = SweepStatus::kOk;
@@ -675,6 +682,30 @@ bool Mission::Localize(VisitLog& log) {
                       log.position, 1e3 * m->height, 1e3 * m->std, m->points, m->floor_points);
       }
     }
+    // The top brick's length and width as built (measure_footprint): each measured axis fused
+    // with the design and its tolerance (a Kalman update of one number), then registered again
+    // when the model's brick changed by more than half a millimetre.
+    std::optional<Eigen::Vector3d> size_before;
+    if (o_.measure_footprint && loc.IsUsable()) {
+      SiteBox& top_brick = workpiece_.bricks.back();
+      if (const auto m = MeasureTopFootprint(log.cloud, loc.T_site_base, top_brick, c_.site.ground_z, &swept.uncropped)) {
+        Eigen::Vector3d size = top_brick.box.size;
+        for (int a = 0; a < 2; ++a) {
+          if (!m->measured[static_cast<std::size_t>(a)]) continue;
+          const double prior = o_.brick_size_sigma[a] * o_.brick_size_sigma[a];
+          size[a] = c_.site.brick.size[a] + prior / (prior + m->std[a] * m->std[a]) * (m->size[a] - c_.site.brick.size[a]);
+        }
+        spdlog::debug("{}: top brick measured {:.1f} x {:.1f} mm (+-{:.2f} / {:.2f}; {} / {} rays at the far edges), "
+                      "modelled {:.1f} x {:.1f} mm", log.position, 1e3 * m->size.x(), 1e3 * m->size.y(), 1e3 * m->std.x(),
+                      1e3 * m->std.y(), m->edge_rays[0], m->edge_rays[1], 1e3 * size.x(), 1e3 * size.y());
+        if ((size - top_brick.box.size).cwiseAbs().maxCoeff() > 0.0005) {
+          size_before = top_brick.box.size;
+          top_brick.box.size = size;
+          model.bricks = workpiece_.bricks;
+          loc = LocalizeInSite(log.cloud, model, loc.T_site_base, c_.registration, true, held);
+        }
+      }
+    }
     log.registration_report = loc.registration.BriefReport();
     log.cloud_labels = loc.registration.labels;
     // Trust is judged on the workpiece's pose in the base frame: that is what placing a brick
@@ -694,6 +725,7 @@ bool Mission::Localize(VisitLog& log) {
     for (const auto& b : loc.registration.bodies)
       if (b.name != "ground" && !b.unconstrained.empty() && why.empty()) why = "unconstrained: " + b.unconstrained.front();
     if (!why.empty() && top_before) workpiece_.bricks.back().T_site_box = *top_before;  // not measured after all
+    if (!why.empty() && size_before) workpiece_.bricks.back().box.size = *size_before;
     if (!why.empty()) {
       spdlog::warn("{}: registration not trusted ({}); {}", log.position, why, log.registration_report);
       for (const auto& b : loc.registration.bodies) {

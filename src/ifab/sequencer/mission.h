@@ -74,6 +74,16 @@ struct MissionOptions {
   /// designed top can be millimetres off, and a top face seen obliquely then pulls the fit
   /// sideways. Off: on seeds 1-3 it did not help (README, issue 12); false: the designed stack.
   bool measure_top{false};
+  /// The model's top brick takes the length and width its top face's far edges show
+  /// (MeasureTopFootprint), and the workpiece is registered again: a sweep sees one end face and
+  /// one long face, so a brick longer or wider than designed (EN 771-1 T1 and R1: up to about
+  /// 10 mm) would otherwise be registered half the difference towards the robot.
+  bool measure_footprint{false};
+  /// The spread of a delivered brick's length and width about its design [m], the prior the
+  /// measured footprint is fused with: EN 771-1 category T1 (the batch mean within 0.40 sqrt(d)
+  /// mm, read as 3 sigma) and R1 (the range of a sample 0.6 sqrt(d) mm, read as 4 sigma) for a
+  /// 240 x 115 mm brick: sqrt(2.07^2 + 2.32^2) = 3.1 mm and sqrt(1.43^2 + 1.61^2) = 2.2 mm.
+  Eigen::Vector2d brick_size_sigma{0.0031, 0.0022};
   /// Re-approaches (reverse and forward along the goal's line) when the maneuver ends with a
   /// sideways offset beyond the controller's tolerance; 0: the paper's single maneuver.
   int max_reapproaches{2};
@@ -214,6 +224,8 @@ class Mission {
     SweepStatus status{SweepStatus::kRetry};  ///< kRetry: log.failure says why; kStop: stopped safely
     std::vector<RayPoint> cloud;              ///< base frame, cropped to the workpiece
     std::vector<RayPoint> raw_cloud;          ///< the same before range-bias compensation
+    std::vector<RayPoint> uncropped;          ///< the whole sweep as read (rays past a tall stack
+                                              ///< reach the floor beyond the crop)
     Seconds t0{0.0}, t1{0.0};                 ///< while the laser swept
     Pose3 T_site_base{Pose3::Identity()};     ///< the pose the sweep was planned from
   };

@@ -3,6 +3,8 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <tuple>
+#include <utility>
 
 namespace ifab::sequencer {
 namespace {
@@ -72,6 +74,155 @@ std::optional<TopFaceMeasurement> MeasureTopFace(const std::vector<RayPoint>& cl
   const double se_top = 1.2533 * top_sigma / std::sqrt(static_cast<double>(top.size()));
   const double se_floor = floor_sigma / std::sqrt(static_cast<double>(used));
   m.std = std::hypot(se_top, se_floor);
+  return m;
+}
+
+std::optional<FootprintMeasurement> MeasureTopFootprint(const std::vector<RayPoint>& cloud, const Pose3& T_site_base,
+                                                        const SiteBox& box, double ground_z,
+                                                        const std::vector<RayPoint>* edge_cloud) {
+  const Pose3 T_box_base = box.T_site_box.inverse(Eigen::Isometry) * T_site_base;
+  const Eigen::Vector3d half = 0.5 * box.box.size;
+  // Windows: a return within 3 cm of the top plane or of the floor's design height along its ray
+  // is on it (the laser's noise is 10-18 mm along the ray; DIN 18202 lets the floor stray 10 mm
+  // over 4 m); the same on both, so a mixed pixel is as likely to count as either. Edges are
+  // searched 25 mm either side of the modelled one (EN 771-1 T1 and R1 together put a brick's
+  // length within about +-10 mm of its design), and a corner's 15 mm are left out.
+  const double margin = 0.02, on_plane = 0.03, search = 0.025, corner = 0.015;
+  // The top face's height in the box frame: the median of the points on it. The stack's height
+  // drifts from its design brick by brick (T1 allows 2.9 mm a brick), so the face is first looked
+  // for 8 cm either side of the modelled one (inside the footprint nothing else is seen from
+  // above), then the points within 3 cm of that.
+  std::vector<Eigen::Vector3d> inside;
+  Eigen::Vector3d mean_origin = Eigen::Vector3d::Zero();
+  for (const RayPoint& p : cloud) {
+    const Eigen::Vector3d b = T_box_base * p.p;
+    mean_origin += T_box_base * p.origin;
+    if (std::abs(b.x()) < half.x() - margin && std::abs(b.y()) < half.y() - margin && std::abs(b.z() - half.z()) < 0.08)
+      inside.push_back(b);
+  }
+  if (inside.size() < 30) return std::nullopt;
+  mean_origin /= static_cast<double>(cloud.size());
+  std::vector<double> top;
+  for (const auto& b : inside) top.push_back(b.z());
+  const double z_coarse = MedianAndSigma(top).first;
+  top.clear();
+  for (const auto& b : inside)
+    if (std::abs(b.z() - z_coarse) < on_plane) top.push_back(b.z());
+  if (top.size() < 30) return std::nullopt;
+  const auto [z_top, z_sigma] = MedianAndSigma(top);
+  const double z_se = 1.2533 * z_sigma / std::sqrt(static_cast<double>(top.size()));
+
+  // Each ray cut with the top plane, weighted by where it returned: on the plane 1, on the floor 0,
+  // in between 1/2. A beam that straddles an edge returns a mixed range between the two
+  // surfaces; as often on one side of the edge as on the other, so a half each side balances.
+  struct Cut {
+    Eigen::Vector2d q;
+    double weight;
+    double cot;  // horizontal over vertical run of the ray: a height error moves q by this much
+  };
+  const Pose3 T_site_box_frame = box.T_site_box;
+  std::vector<Cut> cuts;
+  for (const RayPoint& p : edge_cloud ? *edge_cloud : cloud) {
+    const Eigen::Vector3d o = T_box_base * p.origin, e = T_box_base * p.p;
+    Eigen::Vector3d d = e - o;
+    const double r = d.norm();
+    if (r <= 0.0) continue;
+    d /= r;
+    if (d.z() > -0.1) continue;  // the plane is met too obliquely to place the cut
+    const double s = (z_top - o.z()) / d.z();
+    const Eigen::Vector3d o_site = T_site_box_frame * o, d_site = T_site_box_frame.linear() * d;
+    const double s_floor = (ground_z - o_site.z()) / d_site.z();
+    if (s <= 0.0 || s_floor <= s) continue;
+    double weight;
+    if (std::abs(r - s) < on_plane) weight = 1.0;
+    else if (std::abs(r - s_floor) < on_plane) weight = 0.0;
+    else if (r > s && r < s_floor) weight = 0.5;
+    else continue;  // before the plane or beyond the floor: something else
+    cuts.push_back({(o + s * d).head<2>(), weight, d.head<2>().norm() / -d.z()});
+  }
+
+  FootprintMeasurement m;
+  for (int a = 0; a < 2; ++a) {
+    const int other = 1 - a;
+    const double far = mean_origin[a] < 0.0 ? 1.0 : -1.0;  // the edge away from the laser
+    double edge = half[a];                                 // u: along the axis, towards the far edge
+    int used = 0;
+    double cot = 0.0, density = 0.0, spread = 0.0;
+    for (int pass = 0; pass < 3; ++pass) {  // centre the window on the last estimate
+      std::vector<std::pair<double, double>> u;  // (u, weight)
+      cot = 0.0;
+      for (const Cut& c : cuts) {
+        const double v = far * c.q[a];
+        if (std::abs(c.q[other]) < half[other] - corner && std::abs(v - edge) < search) {
+          u.emplace_back(v, c.weight);
+          cot += c.cot;
+        }
+      }
+      // The weight well inside the face and well past it (8 mm from the edge: past the beam's
+      // width and the mixed pixels), which the range noise keeps a little off 1 and 0.
+      double in = 0.0, out = 0.0;
+      int n_in = 0, n_out = 0;
+      for (const auto& [v, w] : u) {
+        if (v < edge - 0.008) in += w, ++n_in;
+        if (v > edge + 0.008) out += w, ++n_out;
+      }
+      if (n_in < 10 || n_out < 10 || in / n_in - out / n_out < 0.5) {
+        used = 0;
+        break;
+      }
+      in /= n_in;
+      out /= n_out;
+      used = static_cast<int>(u.size());
+      std::sort(u.begin(), u.end());
+      // The edge has as much weight missing before it as there is extra weight past it; each ray
+      // passed moves that balance by in - out, so it lies `k` rays along.
+      double excess = 0.0;
+      for (const auto& x : u) excess += x.second - out;
+      const double k = excess / (in - out);
+      const auto i = static_cast<std::size_t>(std::clamp(k, 0.0, static_cast<double>(u.size() - 1)));
+      edge = 0.5 * (u[i == 0 ? 0 : i - 1].first + u[i].first);
+      spread = 0.0;
+      for (std::size_t j = 0; j < u.size(); ++j) spread += std::pow(u[j].second - (j < i ? in : out), 2);
+      spread = std::sqrt(spread) / (in - out);  // in rays
+      cot /= static_cast<double>(used);
+      density = static_cast<double>(used) / (2.0 * search);
+    }
+    m.edge_rays[static_cast<std::size_t>(a)] = used;
+    if (used == 0) continue;
+    // The near face: the median of the points on it. A point counts when its ray meets the face's
+    // plane 8 mm in from the face's top and bottom edges (the brick's height below the measured
+    // top) and its corners, and returns within 3 cm of it: chosen by the ray's direction, as the
+    // range's noise would mix in the top face and the brick below. Twice, the plane at the first
+    // median the second time.
+    double near_u = -half[a], near_sigma = 0.0;
+    std::size_t near_points = 0;
+    for (int pass = 0; pass < 2; ++pass) {
+      std::vector<double> near;
+      for (const RayPoint& p : cloud) {
+        const Eigen::Vector3d o = T_box_base * p.origin, e = T_box_base * p.p;
+        Eigen::Vector3d d = e - o;
+        const double r = d.norm();
+        if (r <= 0.0 || far * d[a] < 0.1 * r) continue;  // the face is met too obliquely
+        d /= r;
+        const double s = (far * near_u - o[a]) / d[a];
+        const Eigen::Vector3d c = o + s * d;
+        if (s > 0.0 && std::abs(r - s) < on_plane && std::abs(c[other]) < half[other] - corner &&
+            c.z() < z_top - 0.008 && c.z() > z_top - box.box.size.z() + 0.008)
+          near.push_back(far * e[a]);
+      }
+      near_points = near.size();
+      if (near_points < 30) break;
+      std::tie(near_u, near_sigma) = MedianAndSigma(near);
+    }
+    if (near_points < 30) continue;
+    m.measured[static_cast<std::size_t>(a)] = true;
+    m.size[a] = edge - near_u;
+    // The balance's noise (each ray's weight off the step, in rays, at the rays' spacing), the
+    // plane's height error carried along the rays, and the near face's median.
+    m.std[a] = std::hypot(std::hypot((spread + 0.3) / density, cot * z_se),
+                          1.2533 * near_sigma / std::sqrt(static_cast<double>(near_points)));
+  }
+  if (!m.measured[0] && !m.measured[1]) return std::nullopt;
   return m;
 }
 

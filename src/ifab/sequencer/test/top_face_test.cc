@@ -7,6 +7,8 @@
 
 #include "ifab/core/angles.h"
 #include "ifab/core/random.h"
+#include "ifab/perception/registration.h"
+#include "ifab/perception/testing/synthetic.h"
 
 namespace ifab::sequencer {
 namespace {
@@ -93,6 +95,78 @@ TEST(TopFaceTest, NoMeasurementWithoutPointsOnTheFace) {
     if (p.p.z() < 0.30) no_top.push_back(p);
   EXPECT_FALSE(MeasureTopFace(no_top, T_site_base, model, 0.0).has_value());
   EXPECT_TRUE(MeasureTopFace(cloud, T_site_base, model, 0.0).has_value());
+}
+
+// A stack of three bricks, each `grown` longer and wider than designed, on the floor at the
+// site origin, swept by a laser 0.8 m from the top at 50 deg elevation (the mission's scan) whose
+// vertical scan plane yaws across it; ray-cast with the arm laser's noise (18 mm along the ray,
+// beam jitter) and mixed pixels at depth edges. The model's top brick has the designed size and
+// sits where a registration puts it: its near faces (towards the laser) on the real ones.
+struct StackSweep {
+  std::vector<RayPoint> cloud;
+  SiteBox registered_top;
+};
+StackSweep SweepGrownStack(const Eigen::Vector2d& grown, std::uint64_t seed) {
+  const Eigen::Vector3d design(0.240, 0.115, 0.052);
+  Site world;
+  world.has_ground = true;
+  for (int k = 0; k < 3; ++k) {
+    SiteBox b;
+    b.name = "brick_" + std::to_string(k);
+    b.box.size = design + Eigen::Vector3d(grown.x(), grown.y(), 0.0);
+    b.T_site_box = PoseFromXyzRpy(0.0, 0.0, design.z() * (k + 0.5), 0, 0, 0);
+    world.bricks.push_back(b);
+  }
+  const Scene scene(SiteBodies(world, Pose3::Identity(), true));
+  const double top = 3 * design.z(), el = DegToRad(50.0), from = DegToRad(-135.0);  // from the -x, -y side
+  const Eigen::Vector3d origin(0.8 * std::cos(el) * std::cos(from), 0.8 * std::cos(el) * std::sin(from),
+                               top + 0.8 * std::sin(el));
+  const double yaw_centre = std::atan2(-origin.y(), -origin.x());
+  auto at = [&](double t) {
+    Pose3 T = Pose3::Identity();
+    T.translation() = origin;
+    T.linear() = RotationFromRpy(M_PI / 2, 0.0, yaw_centre - 0.2 + 0.2 * t);
+    return T;
+  };
+  testing::SyntheticLaser laser;
+  laser.mixed_pixels = true;
+  RandomStream rng(seed);
+  StackSweep out;
+  out.cloud = testing::SynthesizeCloud(scene, at, 0.0, 2.0, laser, rng);
+  out.registered_top = world.bricks.back();
+  out.registered_top.box.size = design;
+  out.registered_top.T_site_box.translation().head<2>() = -0.5 * grown;  // near faces on the real ones
+  return out;
+}
+
+TEST(TopFootprintTest, MeasuresALongerOrShorterBrickWithinItsReportedError) {
+  // Bricks from 8 mm short to 8 mm long and 4 mm narrow to 4 mm wide (EN 771-1 T1 and R1).
+  int covered = 0, trials = 0;
+  for (int t = 0; t < 10; ++t) {
+    const Eigen::Vector2d grown(0.002 * ((t % 5) * 2 - 4), 0.001 * (((t + 2) % 5) * 2 - 4));
+    const StackSweep sweep = SweepGrownStack(grown, 300 + static_cast<std::uint64_t>(t));
+    const auto m = MeasureTopFootprint(sweep.cloud, Pose3::Identity(), sweep.registered_top, 0.0);
+    ASSERT_TRUE(m.has_value());
+    for (int a = 0; a < 2; ++a) {
+      ASSERT_TRUE(m->measured[static_cast<std::size_t>(a)]) << "axis " << a;
+      const double truth = sweep.registered_top.box.size[a] + grown[a];
+      EXPECT_LT(m->std[a], 0.0015);  // 18 mm of range noise: about 1 mm
+      EXPECT_NEAR(m->size[a], truth, 3.0 * m->std[a]) << "trial " << t << " axis " << a;
+      covered += std::abs(m->size[a] - truth) < 2.0 * m->std[a];
+      ++trials;
+    }
+  }
+  EXPECT_GE(covered, 0.8 * trials);  // a 2-sigma interval holds about 95 %
+}
+
+TEST(TopFootprintTest, NothingWithoutAFarEdge) {
+  // Only the points on the top face (no ray passes its far edges to the floor): no edge to find.
+  const StackSweep sweep = SweepGrownStack(Eigen::Vector2d::Zero(), 7);
+  std::vector<RayPoint> top_only;
+  for (const auto& p : sweep.cloud)
+    if (p.p.z() > 0.15) top_only.push_back(p);
+  EXPECT_FALSE(MeasureTopFootprint(top_only, Pose3::Identity(), sweep.registered_top, 0.0).has_value());
+  EXPECT_TRUE(MeasureTopFootprint(sweep.cloud, Pose3::Identity(), sweep.registered_top, 0.0).has_value());
 }
 
 }  // namespace
