@@ -28,7 +28,7 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
   c.ExpectKeys({"control_period", "drive_timeout_factor", "drive_timeout_margin", "settle_time", "plan_attempts",
                 "max_sweeps", "min_inliers", "max_localization_std_m", "max_localization_std_deg",
                 "max_localization_jump_m", "scan_distance", "scan_elevation_deg", "sweep_half_angle_deg",
-                "sweep_speed_deg_s", "crop_radius", "park_joints_deg", "localize", "place_bricks", "measure_top", "measure_footprint", "brick_size_sigma_mm", "full_covariance_prior", "max_reapproaches",
+                "sweep_speed_deg_s", "crop_radius", "park_joints_deg", "localize", "place_bricks", "measure_top", "measure_footprint", "brick_size_sigma_mm", "hold_measured_position", "full_covariance_prior", "max_reapproaches",
                 "reapproach_tolerance", "reapproach_distance", "reapproach_speed", "tilt_compensation", "tilt_settle",
                 "tilt_window", "attitude_prior_deg", "height_prior_m", "registration_attitude", "imu_tilt_sigma_deg", "check_placement", "placement_correction", "min_brick_inliers", "max_scan_gap",
                 "sensor_wait_timeout", "protective_field", "protective_field_points", "protective_field_margin",
@@ -54,6 +54,7 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
   c.Read("place_bricks", o.place_bricks);
   c.Read("measure_top", o.measure_top);
   c.Read("measure_footprint", o.measure_footprint);
+  c.Read("hold_measured_position", o.hold_measured_position);
   if (auto v = c.Find("brick_size_sigma_mm")) {
     const auto sigma = v->AsNumbers(2);
     if (!(sigma[0] > 0.0 && sigma[1] > 0.0)) v->Fail("two positive numbers (length and width) [mm]");
@@ -682,29 +683,40 @@ bool Mission::Localize(VisitLog& log) {
                       log.position, 1e3 * m->height, 1e3 * m->std, m->points, m->floor_points);
       }
     }
-    // The top brick's length and width as built (measure_footprint): each measured axis fused
-    // with the design and its tolerance (a Kalman update of one number), then registered again
-    // when the model's brick changed by more than half a millimetre.
-    std::optional<Eigen::Vector3d> size_before;
-    if (o_.measure_footprint && loc.IsUsable()) {
+    // The top brick as built (measure_footprint): its length and width, each measured axis fused
+    // with the design and its tolerance (a Kalman update of one number), and (hold_measured_position)
+    // its centre where measured, once there is a stack below it to measure it against (the
+    // first brick defines the site); then registered again when the model changed by more than
+    // half a millimetre. The size does not depend on the registration (near faces and far edges
+    // are both measured), once is enough; the centre is measured against a registration that
+    // follows the model's top brick in part, so it is measured up to three times.
+    std::optional<SiteBox> top_before_footprint;
+    const int footprint_passes = o_.hold_measured_position ? 3 : 1;
+    for (int pass = 0; o_.measure_footprint && loc.IsUsable() && pass < footprint_passes; ++pass) {
       SiteBox& top_brick = workpiece_.bricks.back();
-      if (const auto m = MeasureTopFootprint(log.cloud, loc.T_site_base, top_brick, c_.site.ground_z, &swept.uncropped)) {
-        Eigen::Vector3d size = top_brick.box.size;
-        for (int a = 0; a < 2; ++a) {
-          if (!m->measured[static_cast<std::size_t>(a)]) continue;
-          const double prior = o_.brick_size_sigma[a] * o_.brick_size_sigma[a];
-          size[a] = c_.site.brick.size[a] + prior / (prior + m->std[a] * m->std[a]) * (m->size[a] - c_.site.brick.size[a]);
-        }
-        spdlog::debug("{}: top brick measured {:.1f} x {:.1f} mm (+-{:.2f} / {:.2f}; {} / {} rays at the far edges), "
-                      "modelled {:.1f} x {:.1f} mm", log.position, 1e3 * m->size.x(), 1e3 * m->size.y(), 1e3 * m->std.x(),
-                      1e3 * m->std.y(), m->edge_rays[0], m->edge_rays[1], 1e3 * size.x(), 1e3 * size.y());
-        if ((size - top_brick.box.size).cwiseAbs().maxCoeff() > 0.0005) {
-          size_before = top_brick.box.size;
-          top_brick.box.size = size;
-          model.bricks = workpiece_.bricks;
-          loc = LocalizeInSite(log.cloud, model, loc.T_site_base, c_.registration, true, held);
-        }
+      const auto m = MeasureTopFootprint(log.cloud, loc.T_site_base, top_brick, c_.site.ground_z, &swept.uncropped);
+      if (!m) break;
+      SiteBox moved = top_brick;
+      for (int a = 0; a < 2; ++a) {
+        if (!m->measured[static_cast<std::size_t>(a)]) continue;
+        const double prior = o_.brick_size_sigma[a] * o_.brick_size_sigma[a];
+        moved.box.size[a] =
+            c_.site.brick.size[a] + prior / (prior + m->std[a] * m->std[a]) * (m->size[a] - c_.site.brick.size[a]);
+        if (o_.hold_measured_position && workpiece_.bricks.size() > 1)
+          moved.T_site_box.translation() += moved.T_site_box.linear().col(a) * m->centre_offset[a];
       }
+      const double change = std::max((moved.box.size - top_brick.box.size).cwiseAbs().maxCoeff(),
+                                     (moved.T_site_box.translation() - top_brick.T_site_box.translation()).norm());
+      spdlog::debug("{}: top brick measured {:.1f} x {:.1f} mm (+-{:.2f} / {:.2f}), centre {:+.1f} / {:+.1f} mm; "
+                    "modelled {:.1f} x {:.1f} mm ({} / {} rays at the far edges)", log.position, 1e3 * m->size.x(),
+                    1e3 * m->size.y(), 1e3 * m->std.x(), 1e3 * m->std.y(), 1e3 * m->centre_offset.x(),
+                    1e3 * m->centre_offset.y(), 1e3 * moved.box.size.x(), 1e3 * moved.box.size.y(), m->edge_rays[0],
+                    m->edge_rays[1]);
+      if (change <= 0.0005) break;
+      if (!top_before_footprint) top_before_footprint = top_brick;
+      top_brick = moved;
+      model.bricks = workpiece_.bricks;
+      loc = LocalizeInSite(log.cloud, model, loc.T_site_base, c_.registration, true, held);
     }
     log.registration_report = loc.registration.BriefReport();
     log.cloud_labels = loc.registration.labels;
@@ -725,7 +737,7 @@ bool Mission::Localize(VisitLog& log) {
     for (const auto& b : loc.registration.bodies)
       if (b.name != "ground" && !b.unconstrained.empty() && why.empty()) why = "unconstrained: " + b.unconstrained.front();
     if (!why.empty() && top_before) workpiece_.bricks.back().T_site_box = *top_before;  // not measured after all
-    if (!why.empty() && size_before) workpiece_.bricks.back().box.size = *size_before;
+    if (!why.empty() && top_before_footprint) workpiece_.bricks.back() = *top_before_footprint;
     if (!why.empty()) {
       spdlog::warn("{}: registration not trusted ({}); {}", log.position, why, log.registration_report);
       for (const auto& b : loc.registration.bodies) {

@@ -217,6 +217,7 @@ std::optional<FootprintMeasurement> MeasureTopFootprint(const std::vector<RayPoi
     if (near_points < 30) continue;
     m.measured[static_cast<std::size_t>(a)] = true;
     m.size[a] = edge - near_u;
+    m.centre_offset[a] = far * 0.5 * (edge + near_u);
     // The balance's noise (each ray's weight off the step, in rays, at the rays' spacing), the
     // plane's height error carried along the rays, and the near face's median.
     m.std[a] = std::hypot(std::hypot((spread + 0.3) / density, cot * z_se),

@@ -36,6 +36,9 @@ std::optional<TopFaceMeasurement> MeasureTopFace(const std::vector<RayPoint>& cl
 struct FootprintMeasurement {
   Eigen::Vector2d size{Eigen::Vector2d::Zero()};  ///< [m] along the box's x and y
   Eigen::Vector2d std{Eigen::Vector2d::Zero()};   ///< [m] standard error of each
+  /// [m] the brick's centre from the model's, along the box's x and y (midway between the near
+  /// face and the far edge); its standard error is half the size's
+  Eigen::Vector2d centre_offset{Eigen::Vector2d::Zero()};
   std::array<bool, 2> measured{};                 ///< whether each axis had enough rays at its far edge
   std::array<int, 2> edge_rays{};                 ///< rays used at each far edge
 };
