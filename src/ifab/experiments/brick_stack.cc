@@ -385,7 +385,7 @@ nlohmann::json RunBrickStack(const RunContext& ctx) {
   est_csv << "visit,t,x,y,theta\n";
   visits_csv << "visit,position,desired_x,desired_y,desired_theta,end_x,end_y,end_theta,localized,loc_x,loc_y,"
                 "loc_theta,sweeps,reapproaches,failure,reg_z_mm,reg_roll_deg,reg_pitch_deg,true_z_mm,true_roll_deg,"
-                "true_pitch_deg\n";
+                "true_pitch_deg,placement_bias_x_mm,placement_bias_y_mm,placement_bias_std_x_mm,placement_bias_std_y_mm\n";
   int repositionings = 0;
   for (const auto& log : logs) {
     for (std::size_t i = 0; i < log.plan.trajectory.points.size(); ++i) {
@@ -405,8 +405,12 @@ nlohmann::json RunBrickStack(const RunContext& ctx) {
       const auto reg = XyzRpyFromPose(log.T_site_base_registered);
       const std::size_t k = static_cast<std::size_t>(&log - logs.data());
       const auto tru = XyzRpyFromPose(k < true_T_site_base_at_end.size() ? true_T_site_base_at_end[k] : Pose3::Identity());
-      visits_csv << fmt::format(",{:.3f},{:.4f},{:.4f},{:.3f},{:.4f},{:.4f}\n", 1e3 * reg[2], RadToDeg(reg[3]),
+      visits_csv << fmt::format(",{:.3f},{:.4f},{:.4f},{:.3f},{:.4f},{:.4f}", 1e3 * reg[2], RadToDeg(reg[3]),
                                 RadToDeg(reg[4]), 1e3 * tru[2], RadToDeg(tru[3]), RadToDeg(tru[4]));
+      // The arm's miss learned by this visit (mission.learn_placement_bias; base frame), or empty.
+      const auto mm = [](double v) { return std::isfinite(v) ? fmt::format("{:.3f}", v) : std::string(); };
+      visits_csv << fmt::format(",{},{},{},{}\n", mm(log.placement_bias_mm.x()), mm(log.placement_bias_mm.y()),
+                                mm(log.placement_bias_std_mm.x()), mm(log.placement_bias_std_mm.y()));
     }
     if (log.visit == 0 || log.plan.trajectory.empty()) continue;
     ++repositionings;
@@ -451,6 +455,12 @@ nlohmann::json RunBrickStack(const RunContext& ctx) {
     r["tilt_change_measured_deg_mean"] = tilt.Mean();
     r["tilt_change_measured_deg_max"] = tilt.max;
   }
+  for (auto it = logs.rbegin(); it != logs.rend(); ++it)  // the arm's miss as last learned (base frame)
+    if (std::isfinite(it->placement_bias_mm.x())) {
+      r["placement_bias_learned_mm"] = {it->placement_bias_mm.x(), it->placement_bias_mm.y()};
+      r["placement_bias_learned_std_mm"] = {it->placement_bias_std_mm.x(), it->placement_bias_std_mm.y()};
+      break;
+    }
   r["failed"] = mission.stopped() || static_cast<int>(placed.size()) < plan.TotalBricks();
   if (mission.stopped()) {
     r["failure"] = mission.stop_reason();

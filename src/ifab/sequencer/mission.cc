@@ -28,7 +28,9 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
   c.ExpectKeys({"control_period", "drive_timeout_factor", "drive_timeout_margin", "settle_time", "plan_attempts",
                 "max_sweeps", "min_inliers", "max_localization_std_m", "max_localization_std_deg",
                 "max_localization_jump_m", "scan_distance", "scan_elevation_deg", "sweep_half_angle_deg",
-                "sweep_speed_deg_s", "crop_radius", "park_joints_deg", "localize", "place_bricks", "measure_top", "measure_footprint", "brick_size_sigma_mm", "hold_measured_position", "full_covariance_prior", "max_reapproaches",
+                "sweep_speed_deg_s", "crop_radius", "park_joints_deg", "localize", "place_bricks", "measure_top", "measure_footprint", "brick_size_sigma_mm", "hold_measured_position",
+                "learn_placement_bias", "placement_bias_prior_m", "placement_scatter_m", "placement_bias_walk_m",
+                "full_covariance_prior", "max_reapproaches",
                 "reapproach_tolerance", "reapproach_distance", "reapproach_speed", "tilt_compensation", "tilt_settle",
                 "tilt_window", "attitude_prior_deg", "height_prior_m", "registration_attitude", "imu_tilt_sigma_deg", "check_placement", "placement_correction", "min_brick_inliers", "max_scan_gap",
                 "sensor_wait_timeout", "protective_field", "protective_field_points", "protective_field_margin",
@@ -55,6 +57,10 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
   c.Read("measure_top", o.measure_top);
   c.Read("measure_footprint", o.measure_footprint);
   c.Read("hold_measured_position", o.hold_measured_position);
+  c.Read("learn_placement_bias", o.learn_placement_bias);
+  c.ReadPositive("placement_bias_prior_m", o.placement_bias.prior_std);
+  c.ReadNonNegative("placement_scatter_m", o.placement_bias.scatter);
+  c.ReadNonNegative("placement_bias_walk_m", o.placement_bias.walk);
   if (auto v = c.Find("brick_size_sigma_mm")) {
     const auto sigma = v->AsNumbers(2);
     if (!(sigma[0] > 0.0 && sigma[1] > 0.0)) v->Fail("two positive numbers (length and width) [mm]");
@@ -117,7 +123,8 @@ Mission::Mission(hal::Robot& robot, MissionComponents components, MissionOptions
       step_arm_laser_(o_.max_stamp_lag),
       step_gyro_(o_.max_stamp_lag),
       step_arm_(o_.max_stamp_lag),
-      workpiece_(c_.site) {
+      workpiece_(c_.site),
+      placement_bias_(o_.placement_bias) {
   const Pose3& T = c_.robot.T_base_base_laser;
   estimator_ = std::make_unique<base::BaseStateEstimator>(c_.estimator, Pose2Of(T));
   commands_sent_ = std::make_unique<base::TrackCommandHistory>(c_.base_geometry.track_gauge);
@@ -691,11 +698,15 @@ bool Mission::Localize(VisitLog& log) {
     // are both measured), once is enough; the centre is measured against a registration that
     // follows the model's top brick in part, so it is measured up to three times.
     std::optional<SiteBox> top_before_footprint;
+    std::optional<FootprintMeasurement> last_footprint;  // the last pass's, and whether it moved the model
+    bool last_footprint_held = false;
     const int footprint_passes = o_.hold_measured_position ? 3 : 1;
     for (int pass = 0; o_.measure_footprint && loc.IsUsable() && pass < footprint_passes; ++pass) {
       SiteBox& top_brick = workpiece_.bricks.back();
       const auto m = MeasureTopFootprint(log.cloud, loc.T_site_base, top_brick, c_.site.ground_z, &swept.uncropped);
       if (!m) break;
+      last_footprint = m;
+      last_footprint_held = false;
       SiteBox moved = top_brick;
       for (int a = 0; a < 2; ++a) {
         if (!m->measured[static_cast<std::size_t>(a)]) continue;
@@ -715,6 +726,7 @@ bool Mission::Localize(VisitLog& log) {
       if (change <= 0.0005) break;
       if (!top_before_footprint) top_before_footprint = top_brick;
       top_brick = moved;
+      last_footprint_held = o_.hold_measured_position && workpiece_.bricks.size() > 1;
       model.bricks = workpiece_.bricks;
       loc = LocalizeInSite(log.cloud, model, loc.T_site_base, c_.registration, true, held);
     }
@@ -753,6 +765,16 @@ bool Mission::Localize(VisitLog& log) {
       continue;
     }
     log.failure.clear();
+    // The last brick's miss, against the stack below it (the first brick defines the site).
+    if (o_.learn_placement_bias && last_footprint && last_sent_ && workpiece_.bricks.size() > 1 &&
+        last_sent_->index + 1 == workpiece_.bricks.size()) {
+      const SiteBox& top = workpiece_.bricks.back();
+      Eigen::Vector2d offset;
+      for (int a = 0; a < 2; ++a)
+        offset[a] = top.T_site_box.linear().col(a).dot(top.T_site_box.translation() - last_sent_->intended) +
+                    (last_footprint_held ? 0.0 : last_footprint->centre_offset[a]);
+      LearnPlacementBias(offset, 0.5 * last_footprint->std, last_footprint->measured, log);
+    }
     log.localized = true;
     log.localized_pose = localized;
     log.T_site_base_at_scan = T_site_base;
@@ -771,6 +793,26 @@ bool Mission::Localize(VisitLog& log) {
   }
   StopSafely(fmt::format("{}: no trusted localization after {} sweeps ({})", log.position, log.sweeps, log.failure));
   return false;
+}
+
+void Mission::LearnPlacementBias(const Eigen::Vector2d& offset, const Eigen::Vector2d& offset_std,
+                                 const std::array<bool, 2>& measured, VisitLog& log) {
+  const SiteBox& top = workpiece_.bricks.back();
+  for (int a = 0; a < 2; ++a) {
+    if (!measured[static_cast<std::size_t>(a)]) continue;
+    // The miss along the box's axis a, in the base frame the brick was placed from: the bias
+    // minus the correction sent, so the bias's look is the offset plus the correction.
+    const Eigen::Vector2d u =
+        (last_sent_->R_site_base.transpose() * top.T_site_box.linear().col(a).head<2>()).normalized();
+    placement_bias_.Update(u, offset[a] + u.dot(last_sent_->correction), offset_std[a]);
+  }
+  placement_bias_.Predict();  // the looks were at the last placement's bias; the next may have moved
+  log.placement_bias_mm = 1e3 * placement_bias_.bias();
+  log.placement_bias_std_mm = 1e3 * placement_bias_.covariance().diagonal().cwiseSqrt();
+  spdlog::debug("{}: last brick off by {:+.2f} / {:+.2f} mm (box x / y); placement bias now {:+.2f} / {:+.2f} mm "
+                "(+-{:.2f} / {:.2f}, base frame)", log.position, 1e3 * offset.x(), 1e3 * offset.y(),
+                log.placement_bias_mm.x(), log.placement_bias_mm.y(), log.placement_bias_std_mm.x(),
+                log.placement_bias_std_mm.y());
 }
 
 bool Mission::CheckPlacement(int k, VisitLog& log) {
@@ -871,6 +913,8 @@ bool Mission::PlaceBrick(int k, VisitLog& log) {
         top.T_site_box.translation().z() + 0.5 * top.box.size.z() + 0.5 * c_.site.brick.size.z();
   }
   const Pose3 T_site_intended = T_site_goal;  // where the brick should land (the model's belief)
+  const Eigen::Matrix2d R_site_base = Eigen::Rotation2Dd(Pose2Of(T_site_base).theta).toRotationMatrix();
+  if (o_.learn_placement_bias) T_site_goal.translation().head<2>() -= R_site_base * placement_bias_.bias();
   correction_applied_.setZero();
   if (o_.placement_correction) {
     // The mean of this stand's last offsets: postures change slowly as the stack grows (a round
@@ -925,6 +969,8 @@ bool Mission::PlaceBrick(int k, VisitLog& log) {
                                    "(retry {} of {})", k + 1, attempt + 1, o_.pick_retries));
   }
   workpiece_.bricks.push_back({fmt::format("brick_{}", k), T_site_intended, c_.site.brick});
+  if (o_.learn_placement_bias)
+    last_sent_ = SentBrick{workpiece_.bricks.size() - 1, T_site_intended.translation(), R_site_base, placement_bias_.bias()};
   log.bricks_placed.push_back(k);
   ++bricks_placed_;
   return true;

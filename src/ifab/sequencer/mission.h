@@ -12,6 +12,7 @@
 /// mission stops safely (arm parked, tracks stopped) instead of placing a brick on a pose it
 /// does not trust.
 
+#include <array>
 #include <cmath>
 #include <functional>
 #include <memory>
@@ -31,6 +32,7 @@
 #include "ifab/perception/registration.h"
 #include "ifab/perception/scan_assembly.h"
 #include "ifab/sequencer/building_plan.h"
+#include "ifab/sequencer/placement_bias.h"
 #include "ifab/sync/clock_sync.h"
 
 namespace ifab::sequencer {
@@ -90,6 +92,20 @@ struct MissionOptions {
   /// seeds 1-20 it traded the short face for the long one (1.57 / 1.24 mm against 1.47 / 1.44
   /// with the size alone; README, issue 12).
   bool hold_measured_position{false};
+  /// With measure_footprint: learn where the arm puts a brick relative to where it was sent, in
+  /// the base's frame, and send the next brick against it. An arm without absolute-accuracy
+  /// calibration misses by millimetres, nearly the same at every stand (the four stands see the
+  /// stack in the same posture), so a constant miss walks the stack away from the stands brick
+  /// by brick. Each registration measures the last brick's centre against the stack below it
+  /// (the footprint's near faces and far edges); that minus the correction sent is one look at
+  /// the bias along each measured axis, fused in a Kalman filter. false: bricks go where designed.
+  bool learn_placement_bias{false};
+  /// Its filter: prior std 3 mm per axis (an IRB 4600 without Absolute Accuracy misses by
+  /// millimetres at the flange; its repeatability is 0.05-0.06 mm, DESIGN.md); a placement's
+  /// scatter 0.5 mm (the brick slides as the cups let go); a walk of 0.2 mm per placement (one
+  /// course, 52 mm, changes the posture little: the prior's spread over the stack's 1.3 m is
+  /// 0.1 mm per course). Keys placement_bias_prior_m, placement_scatter_m, placement_bias_walk_m.
+  PlacementBiasOptions placement_bias;
   /// Re-approaches (reverse and forward along the goal's line) when the maneuver ends with a
   /// sideways offset beyond the controller's tolerance; 0: the paper's single maneuver.
   int max_reapproaches{2};
@@ -194,6 +210,10 @@ struct VisitLog {
   /// check_placement: the last brick's measured offset from its goal plus the correction applied
   /// (site frame, horizontal) [mm]; NaN if not measured.
   Eigen::Vector2d placement_offset_mm{Eigen::Vector2d::Constant(std::nan(""))};
+  /// learn_placement_bias: the arm's miss learned so far (base frame x, y) [mm] and its std;
+  /// NaN where nothing was learned at this visit.
+  Eigen::Vector2d placement_bias_mm{Eigen::Vector2d::Constant(std::nan(""))};
+  Eigen::Vector2d placement_bias_std_mm{Eigen::Vector2d::Constant(std::nan(""))};
   std::string failure;               ///< empty when the visit went well
   Seconds t_start{0.0}, t_end{0.0};
 };
@@ -287,6 +307,20 @@ class Mission {
   /// each the brick's measured position minus its designed one plus the correction applied.
   std::map<std::string, std::vector<Eigen::Vector2d>> placement_offsets_;
   Eigen::Vector2d correction_applied_{Eigen::Vector2d::Zero()};  ///< to the last brick's goal
+  // learn_placement_bias: the arm's miss in the base frame (x, y), and what the last brick was
+  // sent with (to tell the bias from the correction when it is measured).
+  PlacementBiasFilter placement_bias_;
+  struct SentBrick {
+    std::size_t index;          ///< in workpiece_.bricks
+    Eigen::Vector3d intended;   ///< where it should land (site)
+    Eigen::Matrix2d R_site_base;  ///< the base's heading when it was placed
+    Eigen::Vector2d correction; ///< the bias it was sent against (base frame)
+  };
+  std::optional<SentBrick> last_sent_;
+  /// One look at the last brick's miss (`offset` along its box's x and y, site frame, measured
+  /// axes only) updates the learned bias.
+  void LearnPlacementBias(const Eigen::Vector2d& offset, const Eigen::Vector2d& offset_std,
+                          const std::array<bool, 2>& measured, VisitLog& log);
   Pose2 T_site_base_;     ///< the current best pose (estimator or localization)
   Vector6d q_;            ///< last commanded arm configuration
   int bricks_placed_{0};

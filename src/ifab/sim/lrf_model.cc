@@ -124,7 +124,8 @@ LrfOptions DrawLrfUnit(const LrfOptions& nominal, const LrfUnitTolerances& t, Ra
 
 BeamSample LrfModel::Measure(const World& world, const Eigen::Vector3d& origin, const Eigen::Vector3d& d,
                              const Eigen::Vector3d& u, const Eigen::Vector3d& w,
-                             const std::optional<WorldHit>& nominal, bool near_edge, RandomStream& rng) const {
+                             const std::optional<WorldHit>& nominal, bool near_edge, RandomStream& rng,
+                             double edge_range) const {
   const LrfOptions& o = options_;
   BeamSample out;
   const bool noisy = o.noise_enabled;
@@ -136,13 +137,17 @@ BeamSample LrfModel::Measure(const World& world, const Eigen::Vector3d& origin, 
   Eigen::Vector3d dir = d;
   std::optional<WorldHit> hit = nominal;
   if (noisy) {
+    // As an angle, where the beam meets an edge beside it (the nearer surface): a beam passing an
+    // edge to the floor jitters as far there as its neighbour ending on the edge's face, so the
+    // two cross it as often.
     const double r0 = nominal->range;
-    const double sigma = o.SigmaAcross(r0) / r0;  // as an angle
+    const double r_jitter = near_edge ? std::max(std::min(r0, edge_range), 0.1) : r0;
+    const double sigma = o.SigmaAcross(r_jitter) / r_jitter;
     // The ziggurat (core/random.h): the same normal distribution, a few times cheaper per draw.
     const double a_in = rng.NormalZiggurat(sigma);
     const double a_out = rng.NormalZiggurat(sigma);
     dir = (d + a_in * u + a_out * w).normalized();
-    out.across_offset = a_in * r0;
+    out.across_offset = a_in * r0;  // where it lands, across the nominal ray
     if (near_edge) {
       hit = world.CastRay(origin, dir, 1e-6, o.range_max + 1.0);
     } else {  // same surface: intersect the deviated ray with the nominal hit's plane
@@ -158,8 +163,12 @@ BeamSample LrfModel::Measure(const World& world, const Eigen::Vector3d& origin, 
   double range = hit->range;
 
   // Mixed pixels: the beam's footprint straddles a depth edge (probe both sides of the beam).
+  // The footprint's width is the one where it meets the edge, at the nearer surface's range: a
+  // beam passing an edge to the floor behind is as wide there as one ending on the edge's face
+  // (taken at its own far range, it would mix less often than its neighbour across the edge,
+  // and the edge would read moved towards the far side).
   if (noisy && near_edge && o.beam_divergence > 0.0) {
-    const double spread = o.beam_divergence + o.sigma_across_const / std::max(range, 0.1);
+    const double spread = o.beam_divergence + o.sigma_across_const / std::max(std::min(range, edge_range), 0.1);
     for (double side : {-1.0, 1.0}) {
       const auto probe = world.CastRay(origin, (dir + side * spread * u).normalized(), 1e-6, o.range_max + 1.0);
       const double r_probe = probe ? probe->range : o.range_max + 1.0;

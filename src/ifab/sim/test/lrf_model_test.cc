@@ -83,6 +83,35 @@ TEST(LrfModel, MixedPixelsAppearOnlyAtDepthEdges) {
   EXPECT_EQ(mixed_elsewhere, 0);
 }
 
+// A beam straddles an edge where it passes it: one whose centre passes a near board's edge to a
+// wall behind is as wide there as one ending on the board, so mixed pixels come as often from
+// either side of the edge (otherwise the edge reads moved towards the far side).
+TEST(LrfModel, MixedPixelsComeFromBothSidesOfAnEdgeAlike) {
+  Site site;
+  site.ground_z = -100.0;
+  site.obstacles.push_back({"near", PoseFromXyzRpy(1.05, 0.5, 0, 0, 0, 0), Box{{0.1, 1.0, 5}}});  // y in [0, 1]
+  site.obstacles.push_back({"far", PoseFromXyzRpy(3.05, 0, 0, 0, 0, 0), Box{{0.1, 20, 20}}});
+  const World world(site);
+  LrfOptions o = Utm30lx();
+  o.bias_enabled = false;
+  o.no_return_probability = 0.0;
+  const LrfModel lrf(o);
+  RandomStream rng(7);
+  int near_side = 0, far_side = 0;
+  LaserScan scan;
+  for (int k = 0; k < 1200; ++k) {
+    const double yaw = rng.Uniform(0.0, o.AngleIncrement());  // the edge anywhere between two beams
+    lrf.Scan(world, [&](double) { return PoseFromXyzRpy(0, 0, 0, 0, 0, yaw); }, rng, scan);
+    for (std::size_t i = 0; i < scan.ranges.size(); ++i) {
+      const double a = scan.Angle(i) + yaw, r = scan.ranges[i];
+      if (std::abs(a) > 0.01 || !(r > 1.1 && r < 2.9)) continue;  // a return between the surfaces
+      (a > 0.0 ? near_side : far_side)++;
+    }
+  }
+  ASSERT_GT(near_side + far_side, 300);
+  EXPECT_NEAR(static_cast<double>(far_side) / near_side, 1.0, 0.2) << near_side << " / " << far_side;
+}
+
 TEST(LrfModel, BadConfigNamesTheField) {
   const auto c = ConfigNode::FromString("lrf:\n  sigma_along: -0.1\n", "utm.yaml");
   try {

@@ -1,0 +1,24 @@
+#include "ifab/sequencer/placement_bias.h"
+
+#include "ifab/core/error.h"
+
+namespace ifab::sequencer {
+
+PlacementBiasFilter::PlacementBiasFilter(PlacementBiasOptions options)
+    : o_(options), covariance_(Eigen::Matrix2d::Identity() * options.prior_std * options.prior_std) {
+  IFAB_CHECK(o_.prior_std > 0.0 && o_.scatter >= 0.0 && o_.walk >= 0.0);  // MissionOptions reads them so
+}
+
+void PlacementBiasFilter::Predict() { covariance_ += Eigen::Matrix2d::Identity() * o_.walk * o_.walk; }
+
+void PlacementBiasFilter::Update(const Eigen::Vector2d& u, double z, double std) {
+  const double r2 = std * std + o_.scatter * o_.scatter;
+  const Eigen::Vector2d Pu = covariance_ * u;
+  const double s = u.dot(Pu) + r2;
+  bias_ += Pu * ((z - u.dot(bias_)) / s);
+  covariance_ -= Pu * Pu.transpose() / s;
+  covariance_ = 0.5 * (covariance_ + covariance_.transpose());
+  ++looks_;
+}
+
+}  // namespace ifab::sequencer

@@ -1,0 +1,43 @@
+#pragma once
+/// \file
+/// Where the arm puts a brick relative to where it was sent, learned from the bricks already
+/// placed. An industrial arm without absolute-accuracy calibration misses a Cartesian goal by
+/// millimetres (link lengths and joint zeros off their nominal values), and the registration's
+/// own systematic errors (range bias, mount) add to it; both repeat from stand to stand, where
+/// the arm takes nearly the same posture. A constant miss walks a stack away from the stands
+/// brick by brick. Each registration sees the last brick against the stack below it: one look,
+/// along each measured axis, at the miss minus the correction that brick was sent with.
+
+#include <Eigen/Core>
+
+namespace ifab::sequencer {
+
+struct PlacementBiasOptions {
+  double prior_std{0.003};   ///< [m] per axis, before any look
+  double scatter{0.0005};    ///< [m] one placement's spread about the bias, beyond the look's own error
+  double walk{0.0002};       ///< [m] how far the bias may move from one placement to the next
+};
+
+/// A Kalman filter on the miss (x, y in the frame the bricks are sent in: the base's).
+class PlacementBiasFilter {
+ public:
+  explicit PlacementBiasFilter(PlacementBiasOptions options = {});
+
+  /// One look: `z` [m] is the miss seen along the unit direction `u` (the brick's measured offset
+  /// from where it should be, plus the correction it was sent with), `std` the look's own error.
+  void Update(const Eigen::Vector2d& u, double z, double std);
+  /// The random walk to the next placement (after the looks at the last one).
+  void Predict();
+
+  const Eigen::Vector2d& bias() const { return bias_; }
+  const Eigen::Matrix2d& covariance() const { return covariance_; }
+  int looks() const { return looks_; }
+
+ private:
+  PlacementBiasOptions o_;
+  Eigen::Vector2d bias_{Eigen::Vector2d::Zero()};
+  Eigen::Matrix2d covariance_;
+  int looks_{0};
+};
+
+}  // namespace ifab::sequencer
