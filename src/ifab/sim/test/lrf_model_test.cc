@@ -64,12 +64,17 @@ TEST(LrfModel, BiasCurveFollowsTheRealUnitAndFig7) {
   EXPECT_EQ(off.Bias(0.4, 0.0), 0.0);
 }
 
-TEST(LrfModel, MixedPixelsAppearOnlyAtDepthEdges) {
+// A board 1 m away covering y in [0, 1] in front of a wall 3 m away: one depth edge at y = 0.
+Site NearBoardBeforeAWall() {
   Site site;
   site.ground_z = -100.0;
-  site.obstacles.push_back({"near", PoseFromXyzRpy(1.05, 0.5, 0, 0, 0, 0), Box{{0.1, 1.0, 5}}});  // y in [0, 1]
+  site.obstacles.push_back({"near", PoseFromXyzRpy(1.05, 0.5, 0, 0, 0, 0), Box{{0.1, 1.0, 5}}});
   site.obstacles.push_back({"far", PoseFromXyzRpy(3.05, 0, 0, 0, 0, 0), Box{{0.1, 20, 20}}});
-  const World world(site);
+  return site;
+}
+
+TEST(LrfModel, MixedPixelsAppearOnlyAtDepthEdges) {
+  const World world(NearBoardBeforeAWall());
   const LrfModel lrf(Utm30lx());
   RandomStream rng(5);
   int mixed_at_edge = 0, mixed_elsewhere = 0;
@@ -87,11 +92,7 @@ TEST(LrfModel, MixedPixelsAppearOnlyAtDepthEdges) {
 // wall behind is as wide there as one ending on the board, so mixed pixels come as often from
 // either side of the edge (otherwise the edge reads moved towards the far side).
 TEST(LrfModel, MixedPixelsComeFromBothSidesOfAnEdgeAlike) {
-  Site site;
-  site.ground_z = -100.0;
-  site.obstacles.push_back({"near", PoseFromXyzRpy(1.05, 0.5, 0, 0, 0, 0), Box{{0.1, 1.0, 5}}});  // y in [0, 1]
-  site.obstacles.push_back({"far", PoseFromXyzRpy(3.05, 0, 0, 0, 0, 0), Box{{0.1, 20, 20}}});
-  const World world(site);
+  const World world(NearBoardBeforeAWall());
   LrfOptions o = Utm30lx();
   o.bias_enabled = false;
   o.no_return_probability = 0.0;
