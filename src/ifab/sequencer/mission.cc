@@ -29,7 +29,7 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
                 "max_sweeps", "min_inliers", "max_localization_std_m", "max_localization_std_deg",
                 "max_localization_jump_m", "scan_distance", "scan_elevation_deg", "sweep_half_angle_deg",
                 "sweep_speed_deg_s", "crop_radius", "park_joints_deg", "localize", "place_bricks", "measure_top", "measure_footprint", "brick_size_sigma_mm", "hold_measured_position",
-                "learn_placement_bias", "placement_bias_prior_m", "placement_scatter_m", "placement_bias_walk_m",
+                "learn_placement_bias", "placement_bias_per_position", "placement_bias_prior_m", "placement_scatter_m", "placement_bias_walk_m",
                 "full_covariance_prior", "max_reapproaches",
                 "reapproach_tolerance", "reapproach_distance", "reapproach_speed", "tilt_compensation", "tilt_settle",
                 "tilt_window", "attitude_prior_deg", "height_prior_m", "registration_attitude", "imu_tilt_sigma_deg", "check_placement", "placement_correction", "min_brick_inliers", "max_scan_gap",
@@ -58,6 +58,7 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
   c.Read("measure_footprint", o.measure_footprint);
   c.Read("hold_measured_position", o.hold_measured_position);
   c.Read("learn_placement_bias", o.learn_placement_bias);
+  c.Read("placement_bias_per_position", o.placement_bias_per_position);
   c.ReadPositive("placement_bias_prior_m", o.placement_bias.prior_std);
   c.ReadNonNegative("placement_scatter_m", o.placement_bias.scatter);
   c.ReadNonNegative("placement_bias_walk_m", o.placement_bias.walk);
@@ -124,7 +125,7 @@ Mission::Mission(hal::Robot& robot, MissionComponents components, MissionOptions
       step_gyro_(o_.max_stamp_lag),
       step_arm_(o_.max_stamp_lag),
       workpiece_(c_.site),
-      placement_bias_(o_.placement_bias) {
+      placement_bias_(o_.placement_bias, o_.placement_bias_per_position) {
   const Pose3& T = c_.robot.T_base_base_laser;
   estimator_ = std::make_unique<base::BaseStateEstimator>(c_.estimator, Pose2Of(T));
   commands_sent_ = std::make_unique<base::TrackCommandHistory>(c_.base_geometry.track_gauge);
@@ -798,21 +799,24 @@ bool Mission::Localize(VisitLog& log) {
 void Mission::LearnPlacementBias(const Eigen::Vector2d& offset, const Eigen::Vector2d& offset_std,
                                  const std::array<bool, 2>& measured, VisitLog& log) {
   const SiteBox& top = workpiece_.bricks.back();
+  PlacementBiasFilter& filter = placement_bias_.For(last_sent_->position);
   for (int a = 0; a < 2; ++a) {
     if (!measured[static_cast<std::size_t>(a)]) continue;
     // The miss along the box's axis a, in the base frame the brick was placed from: the bias
     // minus the correction sent, so the bias's look is the offset plus the correction.
     const Eigen::Vector2d u =
         (last_sent_->R_site_base.transpose() * top.T_site_box.linear().col(a).head<2>()).normalized();
-    placement_bias_.Update(u, offset[a] + u.dot(last_sent_->correction), offset_std[a]);
+    filter.Update(u, offset[a] + u.dot(last_sent_->correction), offset_std[a]);
   }
-  placement_bias_.Predict();  // the looks were at the last placement's bias; the next may have moved
-  log.placement_bias_mm = 1e3 * placement_bias_.bias();
-  log.placement_bias_std_mm = 1e3 * placement_bias_.covariance().diagonal().cwiseSqrt();
-  spdlog::debug("{}: last brick off by {:+.2f} / {:+.2f} mm (box x / y); placement bias now {:+.2f} / {:+.2f} mm "
-                "(+-{:.2f} / {:.2f}, base frame)", log.position, 1e3 * offset.x(), 1e3 * offset.y(),
-                log.placement_bias_mm.x(), log.placement_bias_mm.y(), log.placement_bias_std_mm.x(),
-                log.placement_bias_std_mm.y());
+  // The looks were at the last placement's bias; the next may have moved (all stands: the stack
+  // grew for each of them).
+  placement_bias_.Predict();
+  log.placement_bias_mm = 1e3 * filter.bias();
+  log.placement_bias_std_mm = 1e3 * filter.covariance().diagonal().cwiseSqrt();
+  spdlog::debug("{}: last brick (placed from {}) off by {:+.2f} / {:+.2f} mm (box x / y); placement bias now "
+                "{:+.2f} / {:+.2f} mm (+-{:.2f} / {:.2f}, base frame)", log.position, last_sent_->position,
+                1e3 * offset.x(), 1e3 * offset.y(), log.placement_bias_mm.x(), log.placement_bias_mm.y(),
+                log.placement_bias_std_mm.x(), log.placement_bias_std_mm.y());
 }
 
 bool Mission::CheckPlacement(int k, VisitLog& log) {
@@ -914,7 +918,7 @@ bool Mission::PlaceBrick(int k, VisitLog& log) {
   }
   const Pose3 T_site_intended = T_site_goal;  // where the brick should land (the model's belief)
   const Eigen::Matrix2d R_site_base = Eigen::Rotation2Dd(Pose2Of(T_site_base).theta).toRotationMatrix();
-  if (o_.learn_placement_bias) T_site_goal.translation().head<2>() -= R_site_base * placement_bias_.bias();
+  if (o_.learn_placement_bias) T_site_goal.translation().head<2>() -= R_site_base * placement_bias_.For(log.position).bias();
   correction_applied_.setZero();
   if (o_.placement_correction) {
     // The mean of this stand's last offsets: postures change slowly as the stack grows (a round
@@ -970,7 +974,8 @@ bool Mission::PlaceBrick(int k, VisitLog& log) {
   }
   workpiece_.bricks.push_back({fmt::format("brick_{}", k), T_site_intended, c_.site.brick});
   if (o_.learn_placement_bias)
-    last_sent_ = SentBrick{workpiece_.bricks.size() - 1, T_site_intended.translation(), R_site_base, placement_bias_.bias()};
+    last_sent_ = SentBrick{workpiece_.bricks.size() - 1, T_site_intended.translation(), R_site_base,
+                           placement_bias_.For(log.position).bias(), log.position};
   log.bricks_placed.push_back(k);
   ++bricks_placed_;
   return true;

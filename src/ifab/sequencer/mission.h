@@ -106,6 +106,12 @@ struct MissionOptions {
   /// course, 52 mm, changes the posture little: the prior's spread over the stack's 1.3 m is
   /// 0.1 mm per course). Keys placement_bias_prior_m, placement_scatter_m, placement_bias_walk_m.
   PlacementBiasOptions placement_bias;
+  /// With learn_placement_bias: one filter per building position instead of one for the robot.
+  /// What repeats is not only the arm's posture: each stand has its own floor under the tracks
+  /// (the base's attitude there), and sees the stack's top along its own diagonal (other faces,
+  /// other incidences, so other range-bias residuals); the robot comes back to each stand within
+  /// centimetres. Every filter walks at each placement (the stack grows for all of them).
+  bool placement_bias_per_position{false};
   /// Re-approaches (reverse and forward along the goal's line) when the maneuver ends with a
   /// sideways offset beyond the controller's tolerance; 0: the paper's single maneuver.
   int max_reapproaches{2};
@@ -309,13 +315,15 @@ class Mission {
   Eigen::Vector2d correction_applied_{Eigen::Vector2d::Zero()};  ///< to the last brick's goal
   // learn_placement_bias: the arm's miss in the base frame (x, y), and what the last brick was
   // sent with (to tell the bias from the correction when it is measured).
-  PlacementBiasFilter placement_bias_;
+  PlacementBiasLearner placement_bias_;
   struct SentBrick {
     std::size_t index;          ///< in workpiece_.bricks
     Eigen::Vector3d intended;   ///< where it should land (site)
     Eigen::Matrix2d R_site_base;  ///< the base's heading when it was placed
     Eigen::Vector2d correction; ///< the bias it was sent against (base frame)
+    std::string position;       ///< the building position it was placed from
   };
+
   std::optional<SentBrick> last_sent_;
   /// One look at the last brick's miss (`offset` along its box's x and y, site frame, measured
   /// axes only) updates the learned bias.

@@ -21,4 +21,17 @@ void PlacementBiasFilter::Update(const Eigen::Vector2d& u, double z, double std)
   ++looks_;
 }
 
+PlacementBiasLearner::PlacementBiasLearner(PlacementBiasOptions options, bool per_position)
+    : o_(options), per_position_(per_position), shared_(options) {}
+
+PlacementBiasFilter& PlacementBiasLearner::For(const std::string& position) {
+  if (!per_position_) return shared_;
+  return by_position_.try_emplace(position, o_).first->second;
+}
+
+void PlacementBiasLearner::Predict() {
+  shared_.Predict();
+  for (auto& [name, filter] : by_position_) filter.Predict();
+}
+
 }  // namespace ifab::sequencer

@@ -9,6 +9,8 @@
 /// along each measured axis, at the miss minus the correction that brick was sent with.
 
 #include <Eigen/Core>
+#include <map>
+#include <string>
 
 namespace ifab::sequencer {
 
@@ -38,6 +40,27 @@ class PlacementBiasFilter {
   Eigen::Vector2d bias_{Eigen::Vector2d::Zero()};
   Eigen::Matrix2d covariance_;
   int looks_{0};
+};
+
+/// The filters a mission keeps: one for the robot (the arm's posture repeats at every stand), or
+/// one per building position (each stand also has its own floor under the tracks and its own
+/// view of the stack's top, and the robot comes back to it within centimetres). Every filter
+/// walks at each placement: the stack grows for all of them.
+class PlacementBiasLearner {
+ public:
+  explicit PlacementBiasLearner(PlacementBiasOptions options = {}, bool per_position = false);
+
+  /// The filter that sends and learns the bricks placed from `position`.
+  PlacementBiasFilter& For(const std::string& position);
+  /// To the next placement: every filter's random walk.
+  void Predict();
+  bool per_position() const { return per_position_; }
+
+ private:
+  PlacementBiasOptions o_;
+  bool per_position_;
+  PlacementBiasFilter shared_;
+  std::map<std::string, PlacementBiasFilter> by_position_;
 };
 
 }  // namespace ifab::sequencer
