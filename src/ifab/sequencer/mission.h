@@ -313,8 +313,8 @@ class Mission {
   /// each the brick's measured position minus its designed one plus the correction applied.
   std::map<std::string, std::vector<Eigen::Vector2d>> placement_offsets_;
   Eigen::Vector2d correction_applied_{Eigen::Vector2d::Zero()};  ///< to the last brick's goal
-  // learn_placement_bias: the arm's miss in the base frame (x, y), and what the last brick was
-  // sent with (to tell the bias from the correction when it is measured).
+  // learn_placement_bias: the arm's miss in the base frame (x, y), one for the robot or one per
+  // building position, and what the last brick was sent with (to tell the bias from the correction when it is measured).
   PlacementBiasLearner placement_bias_;
   struct SentBrick {
     std::size_t index;          ///< in workpiece_.bricks
@@ -323,7 +323,6 @@ class Mission {
     Eigen::Vector2d correction; ///< the bias it was sent against (base frame)
     std::string position;       ///< the building position it was placed from
   };
-
   std::optional<SentBrick> last_sent_;
   /// One look at the last brick's miss (`offset` along its box's x and y, site frame, measured
   /// axes only) updates the learned bias.

@@ -54,7 +54,6 @@ class PlacementBiasLearner {
   PlacementBiasFilter& For(const std::string& position);
   /// To the next placement: every filter's random walk.
   void Predict();
-  bool per_position() const { return per_position_; }
 
  private:
   PlacementBiasOptions o_;
