@@ -352,7 +352,7 @@ nlohmann::json RunBrickStack(const RunContext& ctx) {
     for (int k : log.bricks_placed)
       if (k >= 0 && k < static_cast<int>(placed.size())) placed_from[static_cast<std::size_t>(k)] = log.desired;
   AtomicOfstream bricks_csv(out / "brick_errors.csv");
-  bricks_csv << "brick,x_m,y_m,z_m,yaw_deg,error_long_mm,error_short_mm,error_z_mm,error_yaw_deg,error_away_mm,true_length_mm,true_width_mm,model_length_mm,model_width_mm\n";
+  bricks_csv << "brick,x_m,y_m,z_m,yaw_deg,error_long_mm,error_short_mm,error_z_mm,error_yaw_deg,error_away_mm,true_length_mm,true_width_mm,model_length_mm,model_width_mm,model_offset_long_mm,model_offset_short_mm\n";
   for (std::size_t k = 0; k < placed.size(); ++k) {
     const Pose3 design = mission.workpiece().DesignedBrickPose(static_cast<int>(k));
     const Eigen::Vector3d d = placed[k].T_site_box.translation() - design.translation();
@@ -372,10 +372,15 @@ nlohmann::json RunBrickStack(const RunContext& ctx) {
     // The brick's true length and width beside the model's (designed, or measured: measure_footprint).
     const auto& model_bricks = mission.workpiece().bricks;
     const Eigen::Vector3d model_size = k < model_bricks.size() ? model_bricks[k].box.size : Eigen::Vector3d::Zero();
-    bricks_csv << fmt::format("{},{:.5f},{:.5f},{:.5f},{:.4f},{:.3f},{:.3f},{:.3f},{:.4f},{:.3f},{:.2f},{:.2f},{:.2f},{:.2f}\n",
+    // Where the model holds the brick against its design (moved by measure_first_brick, check_placement, ...).
+    const Eigen::Vector3d model_d =
+        k < model_bricks.size() ? Eigen::Vector3d(model_bricks[k].T_site_box.translation() - design.translation())
+                                : Eigen::Vector3d::Zero();
+    bricks_csv << fmt::format("{},{:.5f},{:.5f},{:.5f},{:.4f},{:.3f},{:.3f},{:.3f},{:.4f},{:.3f},{:.2f},{:.2f},{:.2f},{:.2f},{:.3f},{:.3f}\n",
                               k, v[0], v[1], v[2], RadToDeg(v[5]), e_long, e_short, 1000 * d.z(), e_yaw, e_away,
                               1e3 * placed[k].box.size.x(), 1e3 * placed[k].box.size.y(), 1e3 * model_size.x(),
-                              1e3 * model_size.y());
+                              1e3 * model_size.y(), 1e3 * model_d.dot(design.linear().col(0)),
+                              1e3 * model_d.dot(design.linear().col(1)));
   }
 
   Stats end_m, end_deg, corr_m, corr_deg, after_m, after_deg, drift_m, drift_deg;
