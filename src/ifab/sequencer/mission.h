@@ -213,8 +213,8 @@ struct VisitLog {
   Pose3 T_site_base_registered{Pose3::Identity()};  ///< the full pose bricks are placed from (fused)
   std::vector<int> bricks_placed;    ///< brick indices placed at this visit
   std::vector<double> tilt_change_deg;  ///< per brick placed: the measured tilt change since the scan
-  /// check_placement: the last brick's measured offset from its goal plus the correction applied
-  /// (site frame, horizontal) [mm]; NaN if not measured.
+  /// check_placement: where the look after placing put the visit's last brick, from where it was
+  /// meant to land (site frame, horizontal) [mm]; NaN if not measured.
   Eigen::Vector2d placement_offset_mm{Eigen::Vector2d::Constant(std::nan(""))};
   /// learn_placement_bias: the arm's miss learned so far (base frame x, y) [mm] and its std;
   /// NaN where nothing was learned at this visit.
