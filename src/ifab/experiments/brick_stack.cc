@@ -391,7 +391,7 @@ nlohmann::json RunBrickStack(const RunContext& ctx) {
   visits_csv << "visit,position,desired_x,desired_y,desired_theta,end_x,end_y,end_theta,localized,loc_x,loc_y,"
                 "loc_theta,sweeps,reapproaches,failure,reg_z_mm,reg_roll_deg,reg_pitch_deg,true_z_mm,true_roll_deg,"
                 "true_pitch_deg,placement_bias_x_mm,placement_bias_y_mm,placement_bias_std_x_mm,placement_bias_std_y_mm,"
-                "check_offset_x_mm,check_offset_y_mm\n";
+                "check_offset_x_mm,check_offset_y_mm,check_std_x_mm,check_std_y_mm\n";
   int repositionings = 0;
   for (const auto& log : logs) {
     for (std::size_t i = 0; i < log.plan.trajectory.points.size(); ++i) {
@@ -418,8 +418,9 @@ nlohmann::json RunBrickStack(const RunContext& ctx) {
       visits_csv << fmt::format(",{},{},{},{}", mm(log.placement_bias_mm.x()), mm(log.placement_bias_mm.y()),
                                 mm(log.placement_bias_std_mm.x()), mm(log.placement_bias_std_mm.y()));
       // Where the look after placing (mission.check_placement) put the visit's last brick, from
-      // where it was meant to land (site frame), or empty.
-      visits_csv << fmt::format(",{},{}\n", mm(log.placement_offset_mm.x()), mm(log.placement_offset_mm.y()));
+      // where it was meant to land (site frame), and its std, or empty.
+      visits_csv << fmt::format(",{},{},{},{}\n", mm(log.placement_offset_mm.x()), mm(log.placement_offset_mm.y()),
+                                mm(log.placement_offset_std_mm.x()), mm(log.placement_offset_std_mm.y()));
     }
     if (log.visit == 0 || log.plan.trajectory.empty()) continue;
     ++repositionings;

@@ -10,6 +10,7 @@
 
 #include "ifab/core/angles.h"
 #include "ifab/core/config.h"
+#include "ifab/core/se3.h"
 #include "ifab/sequencer/floor_prior.h"
 #include "ifab/sequencer/tilt.h"
 #include "ifab/sequencer/top_face.h"
@@ -885,6 +886,18 @@ bool Mission::CheckPlacement(int k, VisitLog& log) {
       (T_site_brick.translation() - placed.T_site_box.translation()).head<2>() + correction_applied_;
   placement_offsets_[log.position].push_back(offset);
   log.placement_offset_mm = 1e3 * (offset - correction_applied_);
+  // Its uncertainty at the brick's centre: the brick's pose and the stack's, propagated to that
+  // point (left perturbations about base axes through each body's origin), in the site frame.
+  const Eigen::Vector3d p_base = b->T_base_body * placed.T_site_box.translation();
+  const auto at_centre = [&](const RegisteredBody& body) {
+    Eigen::Matrix<double, 3, 6> J;
+    J << Eigen::Matrix3d::Identity(), -Skew(p_base - body.T_base_body.translation());
+    return Eigen::Matrix3d(J * body.covariance * J.transpose());
+  };
+  Eigen::Matrix3d cov = at_centre(*b);
+  if (stack) cov += at_centre(*stack);
+  const Eigen::Matrix3d R_site_base = T_base_site.linear().transpose();
+  log.placement_offset_std_mm = 1e3 * (R_site_base * cov * R_site_base.transpose()).diagonal().head<2>().cwiseSqrt();
   spdlog::debug("{}: brick {} measured {:.2f} / {:.2f} mm from its goal (correction {:.2f} / {:.2f} mm)", log.position,
                 k + 1, 1e3 * (offset.x() - correction_applied_.x()), 1e3 * (offset.y() - correction_applied_.y()),
                 1e3 * correction_applied_.x(), 1e3 * correction_applied_.y());

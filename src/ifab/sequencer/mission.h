@@ -149,9 +149,8 @@ struct MissionOptions {
   /// own: the model holds it where it was measured (the stack as built, not as designed), so the
   /// next registrations fit bricks where they are. Both sweeps share the scan's systematic errors
   /// (range bias, mount, arm), which cancel in the brick's pose relative to the stack.
-  /// Off: on seeds 2, 4, 6 and 8 a single brick measured this way was 4 mm off its true place
-  /// relative to the stack below (the two are seen at different ranges and incidences, so the
-  /// sweep's systematic errors do not cancel), and the figures got worse (README, issue 12).
+  /// Off: over seeds 1-20 the figures got worse (+0.2 / +0.4 mm paired, one failed run) and a run
+  /// took 2.6 times as long (README, issue 12, session 19).
   bool check_placement{false};
   /// With check_placement: at each building position the goal is moved against the mean offset
   /// measured there before (scan-to-place errors repeat with the stand: the same postures, ranges
@@ -216,6 +215,9 @@ struct VisitLog {
   /// check_placement: where the look after placing put the visit's last brick, from where it was
   /// meant to land (site frame, horizontal) [mm]; NaN if not measured.
   Eigen::Vector2d placement_offset_mm{Eigen::Vector2d::Constant(std::nan(""))};
+  /// ... and its std from the registration's covariances (the brick's and the stack's, taken as
+  /// independent) [mm]; NaN if not measured.
+  Eigen::Vector2d placement_offset_std_mm{Eigen::Vector2d::Constant(std::nan(""))};
   /// learn_placement_bias: the arm's miss learned so far (base frame x, y) [mm] and its std;
   /// NaN where nothing was learned at this visit.
   Eigen::Vector2d placement_bias_mm{Eigen::Vector2d::Constant(std::nan(""))};
