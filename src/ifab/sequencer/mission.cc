@@ -33,7 +33,7 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
                 "learn_placement_bias", "placement_bias_per_position", "placement_bias_prior_m", "placement_scatter_m", "placement_bias_walk_m",
                 "full_covariance_prior", "max_reapproaches",
                 "reapproach_tolerance", "reapproach_distance", "reapproach_speed", "tilt_compensation", "tilt_settle",
-                "tilt_window", "attitude_prior_deg", "height_prior_m", "registration_attitude", "imu_tilt_sigma_deg", "check_placement", "placement_correction", "min_brick_inliers", "max_scan_gap",
+                "tilt_window", "attitude_prior_deg", "height_prior_m", "registration_attitude", "imu_tilt_sigma_deg", "check_placement", "gate_placement_check", "placement_correction", "min_brick_inliers", "max_scan_gap",
                 "sensor_wait_timeout", "protective_field", "protective_field_points", "protective_field_margin",
                 "obstacle_wait_timeout", "max_stamp_lag", "max_gyro_rate_factor", "arm_retries", "pick_retries",
                 "drive_retries"});
@@ -107,6 +107,7 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
   }
   c.ReadPositive("imu_tilt_sigma_deg", o.imu_tilt_sigma_deg);
   c.Read("check_placement", o.check_placement);
+  c.Read("gate_placement_check", o.gate_placement_check);
   c.Read("placement_correction", o.placement_correction);
   c.ReadPositive("min_brick_inliers", o.min_brick_inliers, 100000);
   return o;
@@ -870,7 +871,7 @@ bool Mission::CheckPlacement(int k, VisitLog& log) {
   const RegisteredBody* b = reg.Find("placed");
   const RegisteredBody* stack = reg.Find("site");
   std::string why;
-  if (!reg.IsUsable()) why = "registration failed";
+  if (!reg.IsUsable()) why = fmt::format("registration {} ({}); fit: {}", ToString(reg.status), reg.message, reg.fit.message);
   else if (!b || b->inliers < o_.min_brick_inliers) why = fmt::format("{} points on the brick", b ? b->inliers : 0);
   else if (!b->Constrained()) why = "unconstrained: " + b->unconstrained.front();
   else if (stack && !stack->Constrained()) why = "stack unconstrained: " + stack->unconstrained.front();
@@ -884,8 +885,6 @@ bool Mission::CheckPlacement(int k, VisitLog& log) {
   const Pose3 T_site_brick = T_base_site.inverse(Eigen::Isometry) * b->T_base_body * placed.T_site_box;
   const Eigen::Vector2d offset =
       (T_site_brick.translation() - placed.T_site_box.translation()).head<2>() + correction_applied_;
-  placement_offsets_[log.position].push_back(offset);
-  log.placement_offset_mm = 1e3 * (offset - correction_applied_);
   // Its uncertainty at the brick's centre: the brick's pose and the stack's, propagated to that
   // point (left perturbations about base axes through each body's origin), in the site frame.
   const Eigen::Vector3d p_base = b->T_base_body * placed.T_site_box.translation();
@@ -897,7 +896,21 @@ bool Mission::CheckPlacement(int k, VisitLog& log) {
   Eigen::Matrix3d cov = at_centre(*b);
   if (stack) cov += at_centre(*stack);
   const Eigen::Matrix3d R_site_base = T_base_site.linear().transpose();
-  log.placement_offset_std_mm = 1e3 * (R_site_base * cov * R_site_base.transpose()).diagonal().head<2>().cwiseSqrt();
+  const Eigen::Matrix2d look_cov = (R_site_base * cov * R_site_base.transpose()).topLeftCorner<2, 2>();
+  log.placement_offset_mm = 1e3 * (offset - correction_applied_);
+  log.placement_offset_std_mm = 1e3 * look_cov.diagonal().cwiseSqrt();
+  // A look the arm cannot explain is a wrong registration, not a miss (the placement-bias prior
+  // and scatter come from the arm's specification): one good look in a thousand is let go.
+  if (double d2 = 0; o_.gate_placement_check) {
+    const Eigen::Vector2d miss = offset - correction_applied_;
+    if (!ArmCanExplainMiss(miss, look_cov, o_.placement_bias, &d2)) {
+      Note("check_rejected", fmt::format("{}: brick {} measured {:.1f} / {:.1f} mm from its goal, beyond what the arm "
+                                         "misses by (Mahalanobis^2 {:.1f} > {:.1f}); not used",
+                                         log.position, k + 1, 1e3 * miss.x(), 1e3 * miss.y(), d2, kChi2Dof2P999));
+      return true;
+    }
+  }
+  placement_offsets_[log.position].push_back(offset);
   spdlog::debug("{}: brick {} measured {:.2f} / {:.2f} mm from its goal (correction {:.2f} / {:.2f} mm)", log.position,
                 k + 1, 1e3 * (offset.x() - correction_applied_.x()), 1e3 * (offset.y() - correction_applied_.y()),
                 1e3 * correction_applied_.x(), 1e3 * correction_applied_.y());

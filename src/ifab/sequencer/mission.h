@@ -156,6 +156,10 @@ struct MissionOptions {
   /// measured there before (scan-to-place errors repeat with the stand: the same postures, ranges
   /// and incidences every round); false: the goal as designed.
   bool placement_correction{true};
+  /// With check_placement: a look farther from the goal than the arm's accuracy allows (the
+  /// placement-bias prior and scatter, plus the look's covariance; chi-square, 2 dof, 99.9 %) is
+  /// not used (a wrong registration, not a miss). false: every look is used.
+  bool gate_placement_check{true};
   int min_brick_inliers{100};        ///< a checked brick with fewer points is not measured
   RegistrationAttitude registration_attitude{RegistrationAttitude::kImu};  ///< `registration_attitude: imu | free`
   /// [deg] std of the IMU's roll and pitch at standstill, for the covariance of a registration

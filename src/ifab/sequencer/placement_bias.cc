@@ -1,5 +1,7 @@
 #include "ifab/sequencer/placement_bias.h"
 
+#include <Eigen/Cholesky>
+
 #include "ifab/core/error.h"
 
 namespace ifab::sequencer {
@@ -19,6 +21,15 @@ void PlacementBiasFilter::Update(const Eigen::Vector2d& u, double z, double std)
   covariance_ -= Pu * Pu.transpose() / s;
   covariance_ = 0.5 * (covariance_ + covariance_.transpose());
   ++looks_;
+}
+
+bool ArmCanExplainMiss(const Eigen::Vector2d& miss, const Eigen::Matrix2d& look_covariance,
+                       const PlacementBiasOptions& options, double* mahalanobis2) {
+  const double arm = options.prior_std * options.prior_std + options.scatter * options.scatter;
+  const Eigen::Matrix2d expected = look_covariance + arm * Eigen::Matrix2d::Identity();
+  const double d2 = miss.dot(expected.ldlt().solve(miss));
+  if (mahalanobis2) *mahalanobis2 = d2;
+  return d2 <= kChi2Dof2P999;  // false for a NaN
 }
 
 PlacementBiasLearner::PlacementBiasLearner(PlacementBiasOptions options, bool per_position)

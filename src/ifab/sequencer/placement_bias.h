@@ -20,6 +20,16 @@ struct PlacementBiasOptions {
   double walk{0.0002};       ///< [m] how far the bias may move from one placement to the next
 };
 
+/// Whether a look at a placed brick can be a miss of the arm: `miss` [m] (where the look puts the
+/// brick, from where it was meant to land) against what an uncalibrated arm may miss by (the
+/// prior and the scatter) plus the look's own covariance `look_covariance` [m^2]. A look beyond
+/// the chi-square bound of 2 dof at 99.9 % is a wrong registration (a brick fitted an edge off),
+/// not a miss. `mahalanobis2`, if given, receives the squared Mahalanobis distance.
+bool ArmCanExplainMiss(const Eigen::Vector2d& miss, const Eigen::Matrix2d& look_covariance,
+                       const PlacementBiasOptions& options, double* mahalanobis2 = nullptr);
+/// The chi-square quantile of 2 dof at 99.9 %: -2 ln(1 - 0.999) (closed form for 2 dof).
+inline constexpr double kChi2Dof2P999 = 13.8155;
+
 /// A Kalman filter on the miss (x, y in the frame the bricks are sent in: the base's).
 class PlacementBiasFilter {
  public:

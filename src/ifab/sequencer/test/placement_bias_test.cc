@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 #include <cmath>
 #include <string>
@@ -152,6 +153,35 @@ TEST(PlacementBiasTest, AnAxisNeverSeenKeepsItsPrior) {
   EXPECT_NEAR(filter.bias().x(), 0.002, 1e-4);
   EXPECT_DOUBLE_EQ(filter.bias().y(), 0.0);
   EXPECT_NEAR(std::sqrt(filter.covariance()(1, 1)), PlacementBiasOptions{}.prior_std, 1e-12);
+}
+
+// The gate on a look after placing (mission.check_placement): misses an uncalibrated arm makes
+// (drawn from the prior and the scatter, seen with the look's own error) pass as often as the
+// 99.9 % bound says; a brick registered one edge off (half a brick's width, 57 mm) never passes.
+TEST(PlacementBiasTest, TheGateLetsArmMissesPassAndRejectsABrickRegisteredAnEdgeOff) {
+  const PlacementBiasOptions o;
+  Eigen::Matrix2d look;
+  look << 0.0004 * 0.0004, 0.5 * 0.0004 * 0.0006, 0.5 * 0.0004 * 0.0006, 0.0006 * 0.0006;  // correlated, mm-scale
+  const Eigen::LLT<Eigen::Matrix2d> look_chol(look);
+  RandomStream rng(7);
+  int rejected = 0;
+  const int n = 20000;
+  for (int i = 0; i < n; ++i) {
+    const double arm = std::hypot(o.prior_std, o.scatter);
+    const Eigen::Vector2d seen = Eigen::Vector2d(rng.Normal(arm), rng.Normal(arm)) +
+                                 look_chol.matrixL() * Eigen::Vector2d(rng.Normal(), rng.Normal());
+    if (!ArmCanExplainMiss(seen, look, o)) ++rejected;
+    // An edge off: the arm's miss plus half a brick's width along either axis.
+    const Eigen::Vector2d edge(i % 2 ? 0.0575 : 0.0, i % 2 ? 0.0 : -0.0575);
+    EXPECT_FALSE(ArmCanExplainMiss(seen + edge, look, o)) << i;
+  }
+  // Binomial(20000, 0.001): mean 20, std 4.5.
+  EXPECT_GE(rejected, 5);
+  EXPECT_LE(rejected, 40);
+  double d2 = -1.0;
+  EXPECT_TRUE(ArmCanExplainMiss(Eigen::Vector2d::Zero(), look, o, &d2));
+  EXPECT_EQ(d2, 0.0);
+  EXPECT_FALSE(ArmCanExplainMiss(Eigen::Vector2d(std::nan(""), 0.0), look, o));  // a broken look
 }
 
 }  // namespace
