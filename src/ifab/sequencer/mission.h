@@ -149,8 +149,9 @@ struct MissionOptions {
   /// own: the model holds it where it was measured (the stack as built, not as designed), so the
   /// next registrations fit bricks where they are. Both sweeps share the scan's systematic errors
   /// (range bias, mount, arm), which cancel in the brick's pose relative to the stack.
-  /// Off: over seeds 1-20 the figures got worse (+0.2 / +0.4 mm paired, one failed run) and a run
-  /// took 2.6 times as long (README, issue 12, session 19).
+  /// Off: over seeds 1-20, with gate_placement_check, it is no better than without the look
+  /// (+0.14 / +0.20 mm paired, long / short) and a run takes 3.5 times as long; a third of the
+  /// looks do not converge (README, issue 12, session 20).
   bool check_placement{false};
   /// With check_placement: at each building position the goal is moved against the mean offset
   /// measured there before (scan-to-place errors repeat with the stand: the same postures, ranges
@@ -220,7 +221,8 @@ struct VisitLog {
   /// meant to land (site frame, horizontal) [mm]; NaN if not measured.
   Eigen::Vector2d placement_offset_mm{Eigen::Vector2d::Constant(std::nan(""))};
   /// ... and its std from the registration's covariances (the brick's and the stack's, taken as
-  /// independent) [mm]; NaN if not measured.
+  /// independent) [mm]; NaN if not measured. Both are given also for a look the gate rejected
+  /// (gate_placement_check; its incident says so).
   Eigen::Vector2d placement_offset_std_mm{Eigen::Vector2d::Constant(std::nan(""))};
   /// learn_placement_bias: the arm's miss learned so far (base frame x, y) [mm] and its std;
   /// NaN where nothing was learned at this visit.

@@ -166,8 +166,8 @@ TEST(PlacementBiasTest, TheGateLetsArmMissesPassAndRejectsABrickRegisteredAnEdge
   RandomStream rng(7);
   int rejected = 0;
   const int n = 20000;
+  const double arm = std::hypot(o.prior_std, o.scatter);
   for (int i = 0; i < n; ++i) {
-    const double arm = std::hypot(o.prior_std, o.scatter);
     const Eigen::Vector2d seen = Eigen::Vector2d(rng.Normal(arm), rng.Normal(arm)) +
                                  look_chol.matrixL() * Eigen::Vector2d(rng.Normal(), rng.Normal());
     if (!ArmCanExplainMiss(seen, look, o)) ++rejected;
