@@ -391,7 +391,8 @@ nlohmann::json RunBrickStack(const RunContext& ctx) {
   visits_csv << "visit,position,desired_x,desired_y,desired_theta,end_x,end_y,end_theta,localized,loc_x,loc_y,"
                 "loc_theta,sweeps,reapproaches,failure,reg_z_mm,reg_roll_deg,reg_pitch_deg,true_z_mm,true_roll_deg,"
                 "true_pitch_deg,placement_bias_x_mm,placement_bias_y_mm,placement_bias_std_x_mm,placement_bias_std_y_mm,"
-                "check_offset_x_mm,check_offset_y_mm,check_std_x_mm,check_std_y_mm\n";
+                "check_offset_x_mm,check_offset_y_mm,check_std_x_mm,check_std_y_mm,top_offset_x_mm,top_offset_y_mm,true_x,true_y,"
+                "true_theta\n";
   int repositionings = 0;
   for (const auto& log : logs) {
     for (std::size_t i = 0; i < log.plan.trajectory.points.size(); ++i) {
@@ -419,8 +420,12 @@ nlohmann::json RunBrickStack(const RunContext& ctx) {
                                 mm(log.placement_bias_std_mm.x()), mm(log.placement_bias_std_mm.y()));
       // Where the look after placing (mission.check_placement) put the visit's last brick, from
       // where it was meant to land (site frame), and its std, or empty.
-      visits_csv << fmt::format(",{},{},{},{}\n", mm(log.placement_offset_mm.x()), mm(log.placement_offset_mm.y()),
+      visits_csv << fmt::format(",{},{},{},{}", mm(log.placement_offset_mm.x()), mm(log.placement_offset_mm.y()),
                                 mm(log.placement_offset_std_mm.x()), mm(log.placement_offset_std_mm.y()));
+      // Where the localization saw the last visit's brick from where the model held it (along the
+      // brick's x, y; measure_footprint), and the base's true pose at the visit's end (scoring only).
+      visits_csv << fmt::format(",{},{},{:.5f},{:.5f},{:.6f}\n", mm(log.top_offset_mm.x()), mm(log.top_offset_mm.y()),
+                                tru[0], tru[1], tru[5]);
     }
     if (log.visit == 0 || log.plan.trajectory.empty()) continue;
     ++repositionings;

@@ -30,10 +30,10 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
                 "max_sweeps", "min_inliers", "max_localization_std_m", "max_localization_std_deg",
                 "max_localization_jump_m", "scan_distance", "scan_elevation_deg", "sweep_half_angle_deg",
                 "sweep_speed_deg_s", "crop_radius", "park_joints_deg", "localize", "place_bricks", "measure_top", "measure_footprint", "brick_size_sigma_mm", "hold_measured_position",
-                "learn_placement_bias", "placement_bias_per_position", "placement_bias_prior_m", "placement_scatter_m", "placement_bias_walk_m",
+                "learn_placement_bias", "placement_bias_per_position", "placement_bias_prior_m", "placement_scatter_m", "placement_bias_walk_m", "placement_bias_adapt_noise",
                 "full_covariance_prior", "max_reapproaches",
                 "reapproach_tolerance", "reapproach_distance", "reapproach_speed", "tilt_compensation", "tilt_settle",
-                "tilt_window", "attitude_prior_deg", "height_prior_m", "registration_attitude", "imu_tilt_sigma_deg", "check_placement", "gate_placement_check", "placement_correction", "min_brick_inliers", "max_scan_gap",
+                "tilt_window", "attitude_prior_deg", "height_prior_m", "registration_attitude", "imu_tilt_sigma_deg", "check_placement", "gate_placement_check", "placement_correction", "check_against", "min_brick_inliers", "max_scan_gap",
                 "sensor_wait_timeout", "protective_field", "protective_field_points", "protective_field_margin",
                 "obstacle_wait_timeout", "max_stamp_lag", "max_gyro_rate_factor", "arm_retries", "pick_retries",
                 "drive_retries"});
@@ -63,6 +63,7 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
   c.ReadPositive("placement_bias_prior_m", o.placement_bias.prior_std);
   c.ReadNonNegative("placement_scatter_m", o.placement_bias.scatter);
   c.ReadNonNegative("placement_bias_walk_m", o.placement_bias.walk);
+  c.Read("placement_bias_adapt_noise", o.placement_bias.adapt_noise);
   if (auto v = c.Find("brick_size_sigma_mm")) {
     const auto sigma = v->AsNumbers(2);
     if (!(sigma[0] > 0.0 && sigma[1] > 0.0)) v->Fail("two positive numbers (length and width) [mm]");
@@ -109,6 +110,12 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
   c.Read("check_placement", o.check_placement);
   c.Read("gate_placement_check", o.gate_placement_check);
   c.Read("placement_correction", o.placement_correction);
+  if (auto t = c.Find("check_against")) {
+    const std::string v = t->As<std::string>();
+    if (v == "stack") o.check_against = CheckAgainst::kStack;
+    else if (v == "localization") o.check_against = CheckAgainst::kLocalization;
+    else t->Fail("stack or localization");
+  }
   c.ReadPositive("min_brick_inliers", o.min_brick_inliers, 100000);
   return o;
 }
@@ -710,6 +717,9 @@ bool Mission::Localize(VisitLog& log) {
       if (!m) break;
       last_footprint = m;
       last_footprint_held = false;
+      if (pass == 0)
+        for (int a = 0; a < 2; ++a)
+          log.top_offset_mm[a] = m->measured[static_cast<std::size_t>(a)] ? 1e3 * m->centre_offset[a] : std::nan("");
       SiteBox moved = top_brick;
       for (int a = 0; a < 2; ++a) {
         if (!m->measured[static_cast<std::size_t>(a)]) continue;
@@ -769,7 +779,7 @@ bool Mission::Localize(VisitLog& log) {
     }
     log.failure.clear();
     // The last brick's miss, against the stack below it (the first brick defines the site).
-    if (o_.learn_placement_bias && last_footprint && last_sent_ && workpiece_.bricks.size() > 1 &&
+    if (o_.learn_placement_bias && !LookFeedsPlacementBias() && last_footprint && last_sent_ && workpiece_.bricks.size() > 1 &&
         last_sent_->index + 1 == workpiece_.bricks.size()) {
       const SiteBox& top = workpiece_.bricks.back();
       Eigen::Vector2d offset;
@@ -821,6 +831,10 @@ void Mission::LearnPlacementBias(const Eigen::Vector2d& offset, const Eigen::Vec
                 log.placement_bias_std_mm.x(), log.placement_bias_std_mm.y());
 }
 
+bool Mission::LookFeedsPlacementBias() const {
+  return o_.check_placement && o_.learn_placement_bias && o_.check_against == CheckAgainst::kLocalization;
+}
+
 bool Mission::CheckPlacement(int k, VisitLog& log) {
   Progress(fmt::format("{}: checking brick {}", log.position, k + 1));
   const std::string failure_before = log.failure;
@@ -848,9 +862,10 @@ bool Mission::CheckPlacement(int k, VisitLog& log) {
     guess = LevelledPose(guess, *up);
     held[3] = held[4] = true;
   }
+  const bool against_localization = o_.check_against == CheckAgainst::kLocalization;
   std::vector<RegistrationBody> bodies = SiteBodies(below, guess, true);
   for (auto& b : bodies)
-    if (b.name == "site") b.fixed = held;
+    if (b.name == "site") b.fixed = against_localization ? std::array<bool, 6>{true, true, true, true, true, true} : held;
   RegistrationBody brick{"placed", guess.inverse(Eigen::Isometry), {}, true};
   for (const RigidObject& o : alone.Objects())
     if (o.name == placed.name) brick.parts.push_back(o);
@@ -893,8 +908,10 @@ bool Mission::CheckPlacement(int k, VisitLog& log) {
     J << Eigen::Matrix3d::Identity(), -Skew(p_base - body.T_base_body.translation());
     return Eigen::Matrix3d(J * body.covariance * J.transpose());
   };
+  // Against the localization, its error is no part of the look: the brick was sent in the same
+  // frame the look measures it in.
   Eigen::Matrix3d cov = at_centre(*b);
-  if (stack) cov += at_centre(*stack);
+  if (stack && !against_localization) cov += at_centre(*stack);
   const Eigen::Matrix3d R_site_base = T_base_site.linear().transpose();
   const Eigen::Matrix2d look_cov = (R_site_base * cov * R_site_base.transpose()).topLeftCorner<2, 2>();
   log.placement_offset_mm = 1e3 * (offset - correction_applied_);
@@ -909,6 +926,22 @@ bool Mission::CheckPlacement(int k, VisitLog& log) {
                                          log.position, k + 1, 1e3 * miss.x(), 1e3 * miss.y(), d2, kChi2Dof2P999));
       return true;
     }
+  }
+  if (LookFeedsPlacementBias() && last_sent_ && last_sent_->index + 1 == workpiece_.bricks.size()) {
+    // The miss in the base frame the brick was sent from, plus the bias it was sent against: one
+    // look at the bias (both axes, with the look's covariance).
+    const Eigen::Matrix2d R = last_sent_->R_site_base;
+    const Eigen::Vector2d miss_site = (T_site_brick.translation() - last_sent_->intended).head<2>();
+    PlacementBiasFilter& filter = placement_bias_.For(last_sent_->position);
+    filter.Update(R.transpose() * miss_site + last_sent_->correction, R.transpose() * look_cov * R);
+    placement_bias_.Predict();
+    log.placement_bias_mm = 1e3 * filter.bias();
+    log.placement_bias_std_mm = 1e3 * filter.covariance().diagonal().cwiseSqrt();
+    // The model holds the brick where the look put it (the first stays where it was meant to be:
+    // it defines the site), so the next registrations fit the stack as built and do not pull the
+    // frame towards each brick's miss.
+    if (workpiece_.bricks.size() > 1) workpiece_.bricks.back().T_site_box = T_site_brick;
+    return true;
   }
   placement_offsets_[log.position].push_back(offset);
   spdlog::debug("{}: brick {} measured {:.2f} / {:.2f} mm from its goal (correction {:.2f} / {:.2f} mm)", log.position,

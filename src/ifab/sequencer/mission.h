@@ -44,6 +44,9 @@ enum class TiltCompensation {
   kImu,         ///< that, plus the tilt change since the scan from the IMU's accelerometers
 };
 
+/// What the look after placing measures a brick against (MissionOptions::check_against).
+enum class CheckAgainst { kStack, kLocalization };
+
 /// Where the workpiece's roll and pitch in the registration come from.
 enum class RegistrationAttitude {
   kFree,  ///< registered with the rest of the pose (the paper: a 6-DoF fit to the model)
@@ -161,6 +164,15 @@ struct MissionOptions {
   /// placement-bias prior and scatter, plus the look's covariance; chi-square, 2 dof, 99.9 %) is
   /// not used (a wrong registration, not a miss). false: every look is used.
   bool gate_placement_check{true};
+  /// What the look after placing measures the brick against. `stack`: the stack below, registered
+  /// again in the same sweep, and the model then holds the brick where it was seen. `localization`:
+  /// the pose this visit placed from (the stack held there; the base has not moved), so the look
+  /// is the miss of the whole scan-to-place chain that the placement had: the laser's view of the
+  /// stack at the scan posture (mount, range bias, the arm's kinematics there) against the arm's
+  /// reach at the place posture. With learn_placement_bias the look feeds the robot's miss filter
+  /// (base frame) in place of the next visit's footprint, and the model holds the brick where the
+  /// look put it.
+  CheckAgainst check_against{CheckAgainst::kStack};
   int min_brick_inliers{100};        ///< a checked brick with fewer points is not measured
   RegistrationAttitude registration_attitude{RegistrationAttitude::kImu};  ///< `registration_attitude: imu | free`
   /// [deg] std of the IMU's roll and pitch at standstill, for the covariance of a registration
@@ -228,6 +240,10 @@ struct VisitLog {
   /// NaN where nothing was learned at this visit.
   Eigen::Vector2d placement_bias_mm{Eigen::Vector2d::Constant(std::nan(""))};
   Eigen::Vector2d placement_bias_std_mm{Eigen::Vector2d::Constant(std::nan(""))};
+  /// measure_footprint: where this visit's localization saw the centre of the top brick (the last
+  /// visit's) from where the model held it, along the brick's x and y [mm]; NaN for an axis it
+  /// did not measure.
+  Eigen::Vector2d top_offset_mm{Eigen::Vector2d::Constant(std::nan(""))};
   std::string failure;               ///< empty when the visit went well
   Seconds t_start{0.0}, t_end{0.0};
 };
@@ -276,6 +292,8 @@ class Mission {
   /// stand, register the new brick as its own body against the stack, and hold it in the model
   /// where it was measured; learn the stand's placement offset from it. False: stopped.
   bool CheckPlacement(int k, VisitLog& log);
+  /// The look after placing feeds the placement-bias filter (check_against: localization).
+  bool LookFeedsPlacementBias() const;
   /// The registered T_site_base with the floor's prior on its height and attitude.
   Pose3 FuseWithFloorPrior(const Pose3& T_site_base, const Matrix6d& covariance) const;
   bool PlaceBrick(int k, VisitLog& log);

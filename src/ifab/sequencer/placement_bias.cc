@@ -1,6 +1,8 @@
 #include "ifab/sequencer/placement_bias.h"
 
 #include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <algorithm>
 
 #include "ifab/core/error.h"
 
@@ -13,12 +15,35 @@ PlacementBiasFilter::PlacementBiasFilter(PlacementBiasOptions options)
 
 void PlacementBiasFilter::Predict() { covariance_ += Eigen::Matrix2d::Identity() * o_.walk * o_.walk; }
 
+void PlacementBiasFilter::AdaptNoise(double nis, int dof) {
+  // The first two looks meet the wide prior (their innovation is mostly the bias itself); from
+  // the third on, the innovations are mostly the looks' noise.
+  if (!o_.adapt_noise || looks_ < 2) return;
+  nis_sum_ += nis;
+  nis_dof_ += dof;
+  noise_scale_ = std::max(1.0, nis_sum_ / nis_dof_);
+}
+
 void PlacementBiasFilter::Update(const Eigen::Vector2d& u, double z, double std) {
   const double r2 = std * std + o_.scatter * o_.scatter;
   const Eigen::Vector2d Pu = covariance_ * u;
-  const double s = u.dot(Pu) + r2;
+  const double innovation = z - u.dot(bias_);
+  AdaptNoise(innovation * innovation / (u.dot(Pu) + r2), 1);
+  const double s = u.dot(Pu) + noise_scale_ * r2;
   bias_ += Pu * ((z - u.dot(bias_)) / s);
   covariance_ -= Pu * Pu.transpose() / s;
+  covariance_ = 0.5 * (covariance_ + covariance_.transpose());
+  ++looks_;
+}
+
+void PlacementBiasFilter::Update(const Eigen::Vector2d& z, const Eigen::Matrix2d& covariance) {
+  const Eigen::Matrix2d R = covariance + Eigen::Matrix2d::Identity() * o_.scatter * o_.scatter;
+  const Eigen::Vector2d innovation = z - bias_;
+  AdaptNoise(innovation.dot((covariance_ + R).ldlt().solve(innovation)), 2);
+  const Eigen::Matrix2d S = covariance_ + noise_scale_ * R;
+  const Eigen::Matrix2d K = covariance_ * S.inverse();
+  bias_ += K * (z - bias_);
+  covariance_ = (Eigen::Matrix2d::Identity() - K) * covariance_;
   covariance_ = 0.5 * (covariance_ + covariance_.transpose());
   ++looks_;
 }

@@ -18,6 +18,11 @@ struct PlacementBiasOptions {
   double prior_std{0.003};   ///< [m] per axis, before any look
   double scatter{0.0005};    ///< [m] one placement's spread about the bias, beyond the look's own error
   double walk{0.0002};       ///< [m] how far the bias may move from one placement to the next
+  /// Scale the looks' noise (covariance plus scatter) by what the innovations show: the mean
+  /// normalized innovation squared per degree of freedom, once it exceeds 1 (Mehra's
+  /// covariance matching), counted from the third look (the first two meet the wide prior). A look whose reported covariance is too
+  /// small then pulls the bias less, and the bias's covariance stays true.
+  bool adapt_noise{false};
 };
 
 /// Whether a look at a placed brick can be a miss of the arm: `miss` [m] (where the look puts the
@@ -38,15 +43,26 @@ class PlacementBiasFilter {
   /// One look: `z` [m] is the miss seen along the unit direction `u` (the brick's measured offset
   /// from where it should be, plus the correction it was sent with), `std` the look's own error.
   void Update(const Eigen::Vector2d& u, double z, double std);
+  /// One look at both axes: `z` [m] the miss plus the correction sent, `covariance` [m^2] the
+  /// look's own.
+  void Update(const Eigen::Vector2d& z, const Eigen::Matrix2d& covariance);
   /// The random walk to the next placement (after the looks at the last one).
   void Predict();
 
   const Eigen::Vector2d& bias() const { return bias_; }
   const Eigen::Matrix2d& covariance() const { return covariance_; }
   int looks() const { return looks_; }
+  /// The factor the looks' noise is scaled by (adapt_noise; 1 otherwise).
+  double noise_scale() const { return noise_scale_; }
 
  private:
+  /// Records one innovation's normalized square against its `dof` and rescales the noise.
+  void AdaptNoise(double nis, int dof);
+
   PlacementBiasOptions o_;
+  double nis_sum_{0.0};
+  int nis_dof_{0};
+  double noise_scale_{1.0};
   Eigen::Vector2d bias_{Eigen::Vector2d::Zero()};
   Eigen::Matrix2d covariance_;
   int looks_{0};
