@@ -33,7 +33,7 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
                 "learn_placement_bias", "placement_bias_per_position", "placement_bias_prior_m", "placement_scatter_m", "placement_bias_walk_m", "placement_bias_adapt_noise",
                 "full_covariance_prior", "max_reapproaches",
                 "reapproach_tolerance", "reapproach_distance", "reapproach_speed", "tilt_compensation", "tilt_settle",
-                "tilt_window", "attitude_prior_deg", "height_prior_m", "registration_attitude", "imu_tilt_sigma_deg", "check_placement", "gate_placement_check", "placement_correction", "check_against", "min_brick_inliers", "max_scan_gap",
+                "tilt_window", "attitude_prior_deg", "height_prior_m", "registration_attitude", "imu_tilt_sigma_deg", "check_placement", "gate_placement_check", "placement_correction", "check_against", "hold_fused_look", "min_brick_inliers", "max_scan_gap",
                 "sensor_wait_timeout", "protective_field", "protective_field_points", "protective_field_margin",
                 "obstacle_wait_timeout", "max_stamp_lag", "max_gyro_rate_factor", "arm_retries", "pick_retries",
                 "drive_retries"});
@@ -110,6 +110,7 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
   c.Read("check_placement", o.check_placement);
   c.Read("gate_placement_check", o.gate_placement_check);
   c.Read("placement_correction", o.placement_correction);
+  c.Read("hold_fused_look", o.hold_fused_look);
   if (auto t = c.Find("check_against")) {
     const std::string v = t->As<std::string>();
     if (v == "stack") o.check_against = CheckAgainst::kStack;
@@ -933,14 +934,22 @@ bool Mission::CheckPlacement(int k, VisitLog& log) {
     const Eigen::Matrix2d R = last_sent_->R_site_base;
     const Eigen::Vector2d miss_site = (T_site_brick.translation() - last_sent_->intended).head<2>();
     PlacementBiasFilter& filter = placement_bias_.For(last_sent_->position);
-    filter.Update(R.transpose() * miss_site + last_sent_->correction, R.transpose() * look_cov * R);
+    const Eigen::Vector2d z = R.transpose() * miss_site + last_sent_->correction;
+    const Eigen::Matrix2d z_cov = R.transpose() * look_cov * R;
+    // Where the model holds the brick: where the look put it, or (hold_fused_look) that fused
+    // with where the filter expected it to land.
+    Pose3 T_site_held = T_site_brick;
+    if (o_.hold_fused_look)
+      T_site_held.translation().head<2>() =
+          last_sent_->intended.head<2>() + R * (filter.FusedMiss(z, z_cov) - last_sent_->correction);
+    filter.Update(z, z_cov);
     placement_bias_.Predict();
     log.placement_bias_mm = 1e3 * filter.bias();
     log.placement_bias_std_mm = 1e3 * filter.covariance().diagonal().cwiseSqrt();
     // The model holds the brick where the look put it (the first stays where it was meant to be:
     // it defines the site), so the next registrations fit the stack as built and do not pull the
     // frame towards each brick's miss.
-    if (workpiece_.bricks.size() > 1) workpiece_.bricks.back().T_site_box = T_site_brick;
+    if (workpiece_.bricks.size() > 1) workpiece_.bricks.back().T_site_box = T_site_held;
     return true;
   }
   placement_offsets_[log.position].push_back(offset);

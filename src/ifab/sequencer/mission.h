@@ -173,6 +173,11 @@ struct MissionOptions {
   /// (base frame) in place of the next visit's footprint, and the model holds the brick where the
   /// look put it.
   CheckAgainst check_against{CheckAgainst::kStack};
+  /// With check_against: localization and learn_placement_bias: the model holds the brick where
+  /// the look, fused with where the filter expected it, puts it (a look carries its own error,
+  /// which the next registrations would otherwise take for the stack's); false: where the look
+  /// put it.
+  bool hold_fused_look{false};
   int min_brick_inliers{100};        ///< a checked brick with fewer points is not measured
   RegistrationAttitude registration_attitude{RegistrationAttitude::kImu};  ///< `registration_attitude: imu | free`
   /// [deg] std of the IMU's roll and pitch at standstill, for the covariance of a registration

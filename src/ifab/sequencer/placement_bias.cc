@@ -48,6 +48,13 @@ void PlacementBiasFilter::Update(const Eigen::Vector2d& z, const Eigen::Matrix2d
   ++looks_;
 }
 
+Eigen::Vector2d PlacementBiasFilter::FusedMiss(const Eigen::Vector2d& z, const Eigen::Matrix2d& covariance) const {
+  const Eigen::Matrix2d scatter = Eigen::Matrix2d::Identity() * o_.scatter * o_.scatter;
+  const Eigen::Matrix2d expected = covariance_ + scatter;               // this placement's miss, before the look
+  const Eigen::Matrix2d look = noise_scale_ * (covariance + scatter) - scatter;  // the look's own noise, as Update scales it
+  return bias_ + expected * (expected + look).ldlt().solve(z - bias_);
+}
+
 bool ArmCanExplainMiss(const Eigen::Vector2d& miss, const Eigen::Matrix2d& look_covariance,
                        const PlacementBiasOptions& options, double* mahalanobis2) {
   const double arm = options.prior_std * options.prior_std + options.scatter * options.scatter;

@@ -46,6 +46,11 @@ class PlacementBiasFilter {
   /// One look at both axes: `z` [m] the miss plus the correction sent, `covariance` [m^2] the
   /// look's own.
   void Update(const Eigen::Vector2d& z, const Eigen::Matrix2d& covariance);
+  /// Where one placement truly missed (base frame [m]), from a look `z` at it (the miss plus the
+  /// correction sent, as Update takes) with covariance `covariance`, fused with what the filter
+  /// expected before the look (its bias, with its covariance and the placement's scatter). The
+  /// look's noise is scaled as Update would scale it. Call before Update with the same look.
+  Eigen::Vector2d FusedMiss(const Eigen::Vector2d& z, const Eigen::Matrix2d& covariance) const;
   /// The random walk to the next placement (after the looks at the last one).
   void Predict();
 
