@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -163,6 +164,50 @@ TEST(BrickStack, LookAfterPlacingFindsTheFirstBrickWithinItsStd) {
     EXPECT_LT(sigma, 1.0) << axes[a];  // a look that knows the brick to about a millimetre
     EXPECT_NEAR(std::stod(look), truth[a], 4.0 * sigma) << axes[a] << ": std " << sigma << " mm";
   }
+}
+
+// The look at a brick whose size is off its design (look_footprint), in a world where only the
+// bricks' size is as built (tests/data/as_built_bricks_only.yaml): the first brick, seen from the
+// start pose, is found within four times the std the look reports once the look takes its centre
+// between the near faces and the far edges; registered at its design size, it sits half the size
+// error towards the laser, farther off.
+TEST(BrickStack, LookWithTheBricksFootprintFindsABrickOfAnotherSize) {
+  std::map<bool, double> worst;  // look_footprint -> the look's largest axis error [mm]
+  for (const bool footprint : {false, true}) {
+    const std::string name = footprint ? "brick_stack_short_look_footprint" : "brick_stack_short_look_design";
+    const RunOptions o = ShortRun(
+        ShortConfigWith({{"as_built", std::string(IFAB_TEST_DATA_DIR) + "/as_built_bricks_only.yaml"},
+                         {"write_clouds", "false"},
+                         {"mission", std::string("\n  check_placement: true\n  look_footprint: ") +
+                                         (footprint ? "true" : "false")},
+                         {"  bricks", "1"}},
+                        name),
+        "ifab_" + name);
+    const auto r = RunExperiment(o);
+    EXPECT_FALSE(r["failed"].get<bool>()) << r.dump(2);
+    const auto visits = ReadCsv(std::filesystem::path(o.out_dir) / "visits.csv");
+    const auto bricks = ReadCsv(std::filesystem::path(o.out_dir) / "brick_errors.csv");
+    ASSERT_FALSE(visits.empty());
+    ASSERT_FALSE(bricks.empty());
+    // The drawn brick is millimetres off its design (else this test shows nothing).
+    EXPECT_GT(std::max(std::abs(std::stod(bricks[0].at("true_length_mm")) - 240.0),
+                       std::abs(std::stod(bricks[0].at("true_width_mm")) - 115.0)),
+              2.0);
+    const double truth[2] = {1e3 * std::stod(bricks[0].at("x_m")), 1e3 * std::stod(bricks[0].at("y_m"))};
+    const char* axes[2] = {"x", "y"};
+    worst[footprint] = 0.0;
+    for (int a = 0; a < 2; ++a) {
+      const std::string& look = visits[0].at(std::string("check_offset_") + axes[a] + "_mm");
+      const std::string& stddev = visits[0].at(std::string("check_std_") + axes[a] + "_mm");
+      ASSERT_FALSE(look.empty() || stddev.empty()) << "brick 0 was not measured";
+      const double error = std::stod(look) - truth[a];
+      worst[footprint] = std::max(worst[footprint], std::abs(error));
+      if (footprint) {
+        EXPECT_LT(std::abs(error), 4.0 * std::stod(stddev)) << axes[a] << ": std " << stddev << " mm";
+      }
+    }
+  }
+  EXPECT_LT(worst[true], worst[false]);
 }
 
 // The look against the localization (check_against: localization) in the exact world, where the

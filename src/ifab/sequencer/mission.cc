@@ -33,7 +33,7 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
                 "learn_placement_bias", "placement_bias_per_position", "placement_bias_prior_m", "placement_scatter_m", "placement_bias_walk_m", "placement_bias_adapt_noise",
                 "full_covariance_prior", "max_reapproaches",
                 "reapproach_tolerance", "reapproach_distance", "reapproach_speed", "tilt_compensation", "tilt_settle",
-                "tilt_window", "attitude_prior_deg", "height_prior_m", "registration_attitude", "imu_tilt_sigma_deg", "check_placement", "gate_placement_check", "placement_correction", "check_against", "hold_fused_look", "min_brick_inliers", "max_scan_gap",
+                "tilt_window", "attitude_prior_deg", "floor_prior_on_imu_tilt", "height_prior_m", "registration_attitude", "imu_tilt_sigma_deg", "check_placement", "gate_placement_check", "placement_correction", "check_against", "hold_fused_look", "look_footprint", "min_brick_inliers", "max_scan_gap",
                 "sensor_wait_timeout", "protective_field", "protective_field_points", "protective_field_margin",
                 "obstacle_wait_timeout", "max_stamp_lag", "max_gyro_rate_factor", "arm_retries", "pick_retries",
                 "drive_retries"});
@@ -99,6 +99,7 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
   c.ReadNonNegative("tilt_settle", o.tilt_settle);
   c.ReadPositive("tilt_window", o.tilt_window);
   c.ReadPositive("attitude_prior_deg", o.attitude_prior_deg);
+  c.Read("floor_prior_on_imu_tilt", o.floor_prior_on_imu_tilt);
   c.ReadPositive("height_prior_m", o.height_prior_m);
   if (auto t = c.Find("registration_attitude")) {
     const std::string v = t->As<std::string>();
@@ -111,6 +112,7 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
   c.Read("gate_placement_check", o.gate_placement_check);
   c.Read("placement_correction", o.placement_correction);
   c.Read("hold_fused_look", o.hold_fused_look);
+  c.Read("look_footprint", o.look_footprint);
   if (auto t = c.Find("check_against")) {
     const std::string v = t->As<std::string>();
     if (v == "stack") o.check_against = CheckAgainst::kStack;
@@ -797,7 +799,7 @@ bool Mission::Localize(VisitLog& log) {
     // only joint 1 about the vertical: the arm's moment, and so the tilt, barely changes).
     if (held[3])  // the held tilt is the IMU's: its uncertainty, not zero
       loc.covariance = WithHeldTiltCovariance(workpiece->T_base_body, workpiece->covariance, DegToRad(o_.imu_tilt_sigma_deg));
-    T_site_base_ref_ = FuseWithFloorPrior(loc.T_site_base, loc.covariance);
+    T_site_base_ref_ = FuseWithFloorPrior(loc.T_site_base, loc.covariance, held[3]);
     log.T_site_base_registered = T_site_base_ref_;
     up_ref_ = up_scan;
     // The registered pose holds from the scan on (the base stood still): reset at the last scan
@@ -877,12 +879,15 @@ bool Mission::CheckPlacement(int k, VisitLog& log) {
   // does: the sweep's own normals blur a brick's 52 mm side into its top, and the bias they give
   // moved a lone brick by 1.5 / 2.5 mm in the exact world (README, session 19).
   const RangeBiasCompensation& bias = c_.assembly.range_bias;
+  std::vector<RayPoint> compensated;
+  const std::vector<RayPoint>* look_cloud = &swept.cloud;
   if (bias.active() && bias.incidence_from_model && reg.IsUsable() && reg.bodies.size() == bodies.size()) {
     for (std::size_t i = 0; i < bodies.size(); ++i) bodies[i].T_base_body = reg.bodies[i].T_base_body;
     const ifab::Scene at_registration(bodies);
-    std::vector<RayPoint> cloud = swept.raw_cloud;
-    CompensateRangeBias(cloud, bias, &at_registration);
-    reg = Register(cloud, bodies, c_.registration);
+    compensated = swept.raw_cloud;
+    CompensateRangeBias(compensated, bias, &at_registration);
+    reg = Register(compensated, bodies, c_.registration);
+    look_cloud = &compensated;
   }
   const RegisteredBody* b = reg.Find("placed");
   const RegisteredBody* stack = reg.Find("site");
@@ -898,7 +903,27 @@ bool Mission::CheckPlacement(int k, VisitLog& log) {
   // The brick relative to the stack below (both seen in this sweep: the sweep's systematic errors
   // cancel); at the start, with no stack yet, relative to the start pose (the site's definition).
   const Pose3 T_base_site = stack ? stack->T_base_body : guess.inverse(Eigen::Isometry);
-  const Pose3 T_site_brick = T_base_site.inverse(Eigen::Isometry) * b->T_base_body * placed.T_site_box;
+  Pose3 T_site_brick = T_base_site.inverse(Eigen::Isometry) * b->T_base_body * placed.T_site_box;
+  // The brick as built (look_footprint): its centre midway between the registered near faces and
+  // the far edges, and its size; the centre's error (half the size's) joins the look's.
+  SiteBox seen = placed;
+  seen.T_site_box = T_site_brick;
+  Eigen::Matrix2d footprint_cov = Eigen::Matrix2d::Zero();
+  if (o_.look_footprint) {
+    const auto m = MeasureTopFootprint(*look_cloud, T_base_site.inverse(Eigen::Isometry), seen, c_.site.ground_z,
+                                       swept.uncropped.empty() ? nullptr : &swept.uncropped);
+    for (int a = 0; m && a < 2; ++a) {
+      if (!m->measured[static_cast<std::size_t>(a)]) continue;
+      const Eigen::Vector3d axis = seen.T_site_box.linear().col(a);
+      T_site_brick.translation() += axis * m->centre_offset[a];
+      const double prior = o_.brick_size_sigma[a] * o_.brick_size_sigma[a];
+      seen.box.size[a] =
+          c_.site.brick.size[a] + prior / (prior + m->std[a] * m->std[a]) * (m->size[a] - c_.site.brick.size[a]);
+      const Eigen::Vector2d u = axis.head<2>().normalized();
+      footprint_cov += 0.25 * m->std[a] * m->std[a] * u * u.transpose();
+    }
+    seen.T_site_box = T_site_brick;
+  }
   const Eigen::Vector2d offset =
       (T_site_brick.translation() - placed.T_site_box.translation()).head<2>() + correction_applied_;
   // Its uncertainty at the brick's centre: the brick's pose and the stack's, propagated to that
@@ -914,7 +939,7 @@ bool Mission::CheckPlacement(int k, VisitLog& log) {
   Eigen::Matrix3d cov = at_centre(*b);
   if (stack && !against_localization) cov += at_centre(*stack);
   const Eigen::Matrix3d R_site_base = T_base_site.linear().transpose();
-  const Eigen::Matrix2d look_cov = (R_site_base * cov * R_site_base.transpose()).topLeftCorner<2, 2>();
+  const Eigen::Matrix2d look_cov = (R_site_base * cov * R_site_base.transpose()).topLeftCorner<2, 2>() + footprint_cov;
   log.placement_offset_mm = 1e3 * (offset - correction_applied_);
   log.placement_offset_std_mm = 1e3 * look_cov.diagonal().cwiseSqrt();
   // A look the arm cannot explain is a wrong registration, not a miss (the placement-bias prior
@@ -950,6 +975,7 @@ bool Mission::CheckPlacement(int k, VisitLog& log) {
     // it defines the site), so the next registrations fit the stack as built and do not pull the
     // frame towards each brick's miss.
     if (workpiece_.bricks.size() > 1) workpiece_.bricks.back().T_site_box = T_site_held;
+    if (o_.look_footprint) workpiece_.bricks.back().box.size = seen.box.size;
     return true;
   }
   placement_offsets_[log.position].push_back(offset);
@@ -959,11 +985,14 @@ bool Mission::CheckPlacement(int k, VisitLog& log) {
   // The model holds the brick where it was measured, once the stack is there to measure it
   // against (the first brick defines the site: it stays where it was meant to be).
   if (stack) workpiece_.bricks.back().T_site_box = T_site_brick;
+  if (o_.look_footprint) workpiece_.bricks.back().box.size = seen.box.size;
   return true;
 }
 
-Pose3 Mission::FuseWithFloorPrior(const Pose3& T_site_base, const Matrix6d& covariance) const {
-  const FloorPrior prior{c_.site.ground_z, o_.height_prior_m, DegToRad(o_.attitude_prior_deg)};
+Pose3 Mission::FuseWithFloorPrior(const Pose3& T_site_base, const Matrix6d& covariance, bool imu_tilt) const {
+  // A prior a thousand times wider than the floor's leaves the IMU's tilt as it is.
+  const double tilt_sigma = DegToRad(o_.attitude_prior_deg) * (imu_tilt && !o_.floor_prior_on_imu_tilt ? 1e3 : 1.0);
+  const FloorPrior prior{c_.site.ground_z, o_.height_prior_m, tilt_sigma};
   return o_.full_covariance_prior ? FuseFloorPrior(T_site_base, covariance, prior)
                                   : FuseFloorPriorPerComponent(T_site_base, covariance, prior);
 }
