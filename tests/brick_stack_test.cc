@@ -178,6 +178,7 @@ TEST(BrickStack, LookWithTheBricksFootprintFindsABrickOfAnotherSize) {
     const RunOptions o = ShortRun(
         ShortConfigWith({{"as_built", std::string(IFAB_TEST_DATA_DIR) + "/as_built_bricks_only.yaml"},
                          {"write_clouds", "false"},
+                         {"mount", "design"},  // this world's mount is the design's: no calibration needed
                          {"mission", std::string("\n  check_placement: true\n  look_footprint: ") +
                                          (footprint ? "true" : "false")},
                          {"  bricks", "1"}},
