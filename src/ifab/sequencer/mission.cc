@@ -726,9 +726,7 @@ bool Mission::Localize(VisitLog& log) {
       SiteBox moved = top_brick;
       for (int a = 0; a < 2; ++a) {
         if (!m->measured[static_cast<std::size_t>(a)]) continue;
-        const double prior = o_.brick_size_sigma[a] * o_.brick_size_sigma[a];
-        moved.box.size[a] =
-            c_.site.brick.size[a] + prior / (prior + m->std[a] * m->std[a]) * (m->size[a] - c_.site.brick.size[a]);
+        moved.box.size[a] = BrickSizeAsBuilt(a, *m);
         if (o_.hold_measured_position && workpiece_.bricks.size() > 1)
           moved.T_site_box.translation() += moved.T_site_box.linear().col(a) * m->centre_offset[a];
       }
@@ -916,9 +914,7 @@ bool Mission::CheckPlacement(int k, VisitLog& log) {
       if (!m->measured[static_cast<std::size_t>(a)]) continue;
       const Eigen::Vector3d axis = seen.T_site_box.linear().col(a);
       T_site_brick.translation() += axis * m->centre_offset[a];
-      const double prior = o_.brick_size_sigma[a] * o_.brick_size_sigma[a];
-      seen.box.size[a] =
-          c_.site.brick.size[a] + prior / (prior + m->std[a] * m->std[a]) * (m->size[a] - c_.site.brick.size[a]);
+      seen.box.size[a] = BrickSizeAsBuilt(a, *m);
       const Eigen::Vector2d u = axis.head<2>().normalized();
       footprint_cov += 0.25 * m->std[a] * m->std[a] * u * u.transpose();
     }
@@ -987,6 +983,13 @@ bool Mission::CheckPlacement(int k, VisitLog& log) {
   if (stack) workpiece_.bricks.back().T_site_box = T_site_brick;
   if (o_.look_footprint) workpiece_.bricks.back().box.size = seen.box.size;
   return true;
+}
+
+double Mission::BrickSizeAsBuilt(int axis, const FootprintMeasurement& m) const {
+  // One measured axis fused with the design and its tolerance (a Kalman update of one number).
+  const double prior = o_.brick_size_sigma[axis] * o_.brick_size_sigma[axis];
+  const double design = c_.site.brick.size[axis];
+  return design + prior / (prior + m.std[axis] * m.std[axis]) * (m.size[axis] - design);
 }
 
 Pose3 Mission::FuseWithFloorPrior(const Pose3& T_site_base, const Matrix6d& covariance, bool imu_tilt) const {

@@ -33,6 +33,7 @@
 #include "ifab/perception/scan_assembly.h"
 #include "ifab/sequencer/building_plan.h"
 #include "ifab/sequencer/placement_bias.h"
+#include "ifab/sequencer/top_face.h"
 #include "ifab/sync/clock_sync.h"
 
 namespace ifab::sequencer {
@@ -316,6 +317,8 @@ class Mission {
   /// The look after placing feeds the placement-bias filter (check_against: localization).
   bool LookFeedsPlacementBias() const;
   /// The registered T_site_base with the floor's prior on its height and attitude.
+  /// A brick's length (`axis` 0) or width (1) as built: measured by `m`, fused with the design.
+  double BrickSizeAsBuilt(int axis, const FootprintMeasurement& m) const;
   /// `imu_tilt`: the registration held the IMU's roll and pitch.
   Pose3 FuseWithFloorPrior(const Pose3& T_site_base, const Matrix6d& covariance, bool imu_tilt) const;
   bool PlaceBrick(int k, VisitLog& log);
