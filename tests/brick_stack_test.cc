@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -134,6 +135,38 @@ std::vector<std::map<std::string, std::string>> ReadCsv(const std::filesystem::p
   return rows;
 }
 
+// The look after placing at brick 0, read back with its truth (brick 0 is designed at the site's
+// origin, heading 0: its true x, y are its offset); nullopt (with a failure) when it is missing.
+struct FirstBrickLook {
+  double look[2]{}, stddev[2]{}, truth[2]{};  // [mm] along the site's x and y
+  std::map<std::string, std::string> brick;   // brick_errors.csv's row
+};
+std::optional<FirstBrickLook> LookAtFirstBrick(const RunOptions& o) {
+  const auto r = RunExperiment(o);
+  EXPECT_FALSE(r["failed"].get<bool>()) << r.dump(2);
+  const auto visits = ReadCsv(std::filesystem::path(o.out_dir) / "visits.csv");
+  const auto bricks = ReadCsv(std::filesystem::path(o.out_dir) / "brick_errors.csv");
+  if (visits.empty() || bricks.empty() || bricks[0].at("brick") != "0") {
+    ADD_FAILURE() << o.out_dir << ": no visit or no brick 0";
+    return std::nullopt;
+  }
+  FirstBrickLook f;
+  f.brick = bricks[0];
+  const char* axes[2] = {"x", "y"};
+  for (int a = 0; a < 2; ++a) {
+    const std::string& look = visits[0].at(std::string("check_offset_") + axes[a] + "_mm");
+    const std::string& stddev = visits[0].at(std::string("check_std_") + axes[a] + "_mm");
+    if (look.empty() || stddev.empty()) {
+      ADD_FAILURE() << o.out_dir << ": brick 0 was not measured";
+      return std::nullopt;
+    }
+    f.look[a] = std::stod(look);
+    f.stddev[a] = std::stod(stddev);
+    f.truth[a] = 1e3 * std::stod(bricks[0].at(std::string(axes[a]) + "_m"));
+  }
+  return f;
+}
+
 // The look after placing (mission.check_placement) in the exact world: the first brick, seen
 // from the start pose, lies where the look says, within four times the std it reports. Before
 // the look compensated the range bias at the registered model's incidence, it put the brick
@@ -145,24 +178,12 @@ TEST(BrickStack, LookAfterPlacingFindsTheFirstBrickWithinItsStd) {
                                                  {"  bricks", "1"}},  // the first brick alone
                                                 "brick_stack_short_check"),
                                 "ifab_brick_stack_short_check");
-  const auto r = RunExperiment(o);
-  EXPECT_FALSE(r["failed"].get<bool>()) << r.dump(2);
-  const auto visits = ReadCsv(std::filesystem::path(o.out_dir) / "visits.csv");
-  const auto bricks = ReadCsv(std::filesystem::path(o.out_dir) / "brick_errors.csv");
-  ASSERT_FALSE(visits.empty());
-  ASSERT_FALSE(bricks.empty());
-  ASSERT_EQ(bricks[0].at("brick"), "0");
-  // Brick 0 is designed at the site's origin, heading 0: its true x, y are its offset.
-  const double truth[2] = {1e3 * std::stod(bricks[0].at("x_m")), 1e3 * std::stod(bricks[0].at("y_m"))};
-  const char* axes[2] = {"x", "y"};
+  const auto f = LookAtFirstBrick(o);
+  ASSERT_TRUE(f);
   for (int a = 0; a < 2; ++a) {
-    const std::string& look = visits[0].at(std::string("check_offset_") + axes[a] + "_mm");
-    const std::string& stddev = visits[0].at(std::string("check_std_") + axes[a] + "_mm");
-    ASSERT_FALSE(look.empty() || stddev.empty()) << "brick 0 was not measured";
-    const double sigma = std::stod(stddev);
-    EXPECT_GT(sigma, 0.0);
-    EXPECT_LT(sigma, 1.0) << axes[a];  // a look that knows the brick to about a millimetre
-    EXPECT_NEAR(std::stod(look), truth[a], 4.0 * sigma) << axes[a] << ": std " << sigma << " mm";
+    EXPECT_GT(f->stddev[a], 0.0);
+    EXPECT_LT(f->stddev[a], 1.0) << a;  // a look that knows the brick to about a millimetre
+    EXPECT_NEAR(f->look[a], f->truth[a], 4.0 * f->stddev[a]) << "axis " << a << ": std " << f->stddev[a] << " mm";
   }
 }
 
@@ -184,27 +205,18 @@ TEST(BrickStack, LookWithTheBricksFootprintFindsABrickOfAnotherSize) {
                          {"  bricks", "1"}},
                         name),
         "ifab_" + name);
-    const auto r = RunExperiment(o);
-    EXPECT_FALSE(r["failed"].get<bool>()) << r.dump(2);
-    const auto visits = ReadCsv(std::filesystem::path(o.out_dir) / "visits.csv");
-    const auto bricks = ReadCsv(std::filesystem::path(o.out_dir) / "brick_errors.csv");
-    ASSERT_FALSE(visits.empty());
-    ASSERT_FALSE(bricks.empty());
+    const auto f = LookAtFirstBrick(o);
+    ASSERT_TRUE(f);
     // The drawn brick is millimetres off its design (else this test shows nothing).
-    EXPECT_GT(std::max(std::abs(std::stod(bricks[0].at("true_length_mm")) - 240.0),
-                       std::abs(std::stod(bricks[0].at("true_width_mm")) - 115.0)),
+    EXPECT_GT(std::max(std::abs(std::stod(f->brick.at("true_length_mm")) - 240.0),
+                       std::abs(std::stod(f->brick.at("true_width_mm")) - 115.0)),
               2.0);
-    const double truth[2] = {1e3 * std::stod(bricks[0].at("x_m")), 1e3 * std::stod(bricks[0].at("y_m"))};
-    const char* axes[2] = {"x", "y"};
     worst[footprint] = 0.0;
     for (int a = 0; a < 2; ++a) {
-      const std::string& look = visits[0].at(std::string("check_offset_") + axes[a] + "_mm");
-      const std::string& stddev = visits[0].at(std::string("check_std_") + axes[a] + "_mm");
-      ASSERT_FALSE(look.empty() || stddev.empty()) << "brick 0 was not measured";
-      const double error = std::stod(look) - truth[a];
+      const double error = f->look[a] - f->truth[a];
       worst[footprint] = std::max(worst[footprint], std::abs(error));
       if (footprint) {
-        EXPECT_LT(std::abs(error), 4.0 * std::stod(stddev)) << axes[a] << ": std " << stddev << " mm";
+        EXPECT_LT(std::abs(error), 4.0 * f->stddev[a]) << "axis " << a << ": std " << f->stddev[a] << " mm";
       }
     }
   }

@@ -1,6 +1,7 @@
 #include "ifab/sequencer/floor_prior.h"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Dense>
 #include <algorithm>
 
 namespace ifab::sequencer {
@@ -20,8 +21,10 @@ Pose3 FuseFloorPrior(const Pose3& T_site_base, const Eigen::Matrix<double, 6, 6>
                       prior.tilt_sigma * prior.tilt_sigma)
           .asDiagonal();
   const Eigen::Matrix<double, 6, 6> P = 0.5 * (covariance + covariance.transpose());
-  const Eigen::Matrix3d S = H * P * H.transpose() + R;
-  const Eigen::Matrix<double, 6, 1> delta = P * H.transpose() * S.ldlt().solve(innovation);
+  const int rows = prior.on_tilt ? 3 : 1;  // the height alone when the prior leaves the tilt be
+  const Eigen::MatrixXd Hr = H.topRows(rows);
+  const Eigen::MatrixXd S = Hr * P * Hr.transpose() + R.topLeftCorner(rows, rows);
+  const Eigen::Matrix<double, 6, 1> delta = P * Hr.transpose() * S.ldlt().solve(innovation.head(rows));
   Pose3 out = T_site_base;
   out.translation() += delta.head<3>();
   out.linear() = ExpSO3(delta.tail<3>()) * T_site_base.linear();
@@ -36,8 +39,9 @@ Pose3 FuseFloorPriorPerComponent(const Pose3& T_site_base, const Eigen::Matrix<d
     return prior_mean + w * (measured - prior_mean);
   };
   const double var_tilt = 0.5 * (covariance(3, 3) + covariance(4, 4));  // about horizontal axes
-  return PoseFromXyzRpy(v[0], v[1], fuse(v[2], covariance(2, 2), prior.ground_z, prior.height_sigma),
-                        fuse(v[3], var_tilt, 0.0, prior.tilt_sigma), fuse(v[4], var_tilt, 0.0, prior.tilt_sigma),
+  const double roll = prior.on_tilt ? fuse(v[3], var_tilt, 0.0, prior.tilt_sigma) : v[3];
+  const double pitch = prior.on_tilt ? fuse(v[4], var_tilt, 0.0, prior.tilt_sigma) : v[4];
+  return PoseFromXyzRpy(v[0], v[1], fuse(v[2], covariance(2, 2), prior.ground_z, prior.height_sigma), roll, pitch,
                         v[5]);
 }
 

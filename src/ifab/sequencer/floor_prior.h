@@ -16,6 +16,9 @@ struct FloorPrior {
   double ground_z{0.0};      ///< [m] floor height in the site frame (the base origin's)
   double height_sigma{0.004};  ///< [m]
   double tilt_sigma{0.0017};   ///< [rad] of the base's up axis from the vertical
+  /// false: the prior says nothing about the tilt (another sensor measured it: the IMU's roll
+  /// and pitch include the chassis's lean under the arm, which a level floor does not describe).
+  bool on_tilt{true};
 };
 
 /// A Kalman update of T_site_base, with covariance over [x y z rx ry rz] (perturbations in the

@@ -993,9 +993,8 @@ double Mission::BrickSizeAsBuilt(int axis, const FootprintMeasurement& m) const 
 }
 
 Pose3 Mission::FuseWithFloorPrior(const Pose3& T_site_base, const Matrix6d& covariance, bool imu_tilt) const {
-  // A prior a thousand times wider than the floor's leaves the IMU's tilt as it is.
-  const double tilt_sigma = DegToRad(o_.attitude_prior_deg) * (imu_tilt && !o_.floor_prior_on_imu_tilt ? 1e3 : 1.0);
-  const FloorPrior prior{c_.site.ground_z, o_.height_prior_m, tilt_sigma};
+  const FloorPrior prior{c_.site.ground_z, o_.height_prior_m, DegToRad(o_.attitude_prior_deg),
+                         /*on_tilt=*/!imu_tilt || o_.floor_prior_on_imu_tilt};
   return o_.full_covariance_prior ? FuseFloorPrior(T_site_base, covariance, prior)
                                   : FuseFloorPriorPerComponent(T_site_base, covariance, prior);
 }

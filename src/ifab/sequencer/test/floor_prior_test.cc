@@ -86,5 +86,28 @@ TEST(FloorPriorTest, AWellPinnedPoseBarelyMoves) {
   EXPECT_NEAR(std::acos(fused.linear()(2, 2)), DegToRad(1.0), DegToRad(0.05));
 }
 
+TEST(FloorPriorTest, OffTheTiltItFusesTheHeightAlone) {
+  // The IMU held the tilt (it includes the chassis's lean under the arm, which a level floor does
+  // not describe): a prior with on_tilt false leaves the base's up axis and still fuses the height.
+  const Case c = TiltedRegistration();
+  Matrix6d cov = ScanCovariance(c.registered, c.workpiece_base);
+  for (int k : {3, 4}) {  // held: the IMU's own uncertainty, uncorrelated with the scan's
+    cov.row(k).setZero();
+    cov.col(k).setZero();
+    cov(k, k) = DegToRad(0.08) * DegToRad(0.08);
+  }
+  FloorPrior off_tilt{0.0, 0.004, DegToRad(0.1)};
+  off_tilt.on_tilt = false;
+  // (The full update may turn the pose about the vertical through the scan's correlations: the
+  // tilt's size is what must stay.)
+  for (const Pose3& fused : {FuseFloorPrior(c.registered, cov, off_tilt), FuseFloorPriorPerComponent(c.registered, cov, off_tilt)}) {
+    EXPECT_NEAR(fused.linear()(2, 2), c.registered.linear()(2, 2), 1e-12);
+    EXPECT_LT(std::abs(fused.translation().z()), 0.5 * std::abs(c.registered.translation().z()));
+  }
+  // The same tilt with the prior on it is pulled towards level (0.1 deg prior, 0.08 deg held).
+  const Pose3 on = FuseFloorPrior(c.registered, cov, FloorPrior{0.0, 0.004, DegToRad(0.1)});
+  EXPECT_LT(std::acos(std::min(1.0, on.linear()(2, 2))), 0.8 * DegToRad(1.0));
+}
+
 }  // namespace
 }  // namespace ifab::sequencer
