@@ -153,9 +153,10 @@ struct MissionOptions {
   /// lean under the arm's moment (a pitch of 0.1-0.25 deg in the as-built world) and is known to
   /// 0.08 deg: fused with a 0.1 deg prior, the IMU's tilt is pulled 40 % towards level, which
   /// leans the frame the brick is placed in by up to 0.1 deg (2 mm at the top of the stack).
-  /// false: the IMU's tilt stands (height still fused). Seeds 1-20 with the localization look:
-  /// short face -0.08 +- 0.07 mm, worst brick -0.45 +- 0.22 mm (README, session 23).
-  bool floor_prior_on_imu_tilt{true};
+  /// false: the IMU's tilt stands (height still fused). Seeds 1-20, paired against true: the
+  /// default run -0.11 +- 0.07 / -0.08 +- 0.09 mm, worst brick -0.50 +- 0.24 mm (session 24); with
+  /// the localization look, worst brick -0.45 +- 0.22 mm (session 23; README, issue 12).
+  bool floor_prior_on_imu_tilt{false};
   double height_prior_m{0.004};
   /// After the visit's brick, sweep again from the same stand and register the new brick on its
   /// own: the model holds it where it was measured (the stack as built, not as designed), so the
