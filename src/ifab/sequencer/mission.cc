@@ -679,14 +679,24 @@ bool Mission::Localize(VisitLog& log) {
     }
     SiteLocalization loc = LocalizeInSite(log.cloud, model, guess, c_.registration, true, held);
     // Range bias with the incidence on the registered model (a brick's 52 mm side is narrower
-    // than the normals' neighbourhood), then register again from there.
+    // than the normals' neighbourhood), then register again from there. That registration waits
+    // for the top brick's footprint below, which changes the model and registers again anyway:
+    // one registration instead of two (the size comes from near faces and far edges both, so
+    // the first registration's pose measures it as well; issue 15, session 24).
     const RangeBiasCompensation& bias = c_.assembly.range_bias;
+    bool register_again = false;
     if (bias.active() && bias.incidence_from_model && loc.IsUsable()) {
       const ifab::Scene at_registration(SiteBodies(model, loc.T_site_base, true));
       log.cloud = swept.raw_cloud;
       CompensateRangeBias(log.cloud, bias, &at_registration);
-      loc = LocalizeInSite(log.cloud, model, loc.T_site_base, c_.registration, true, held);
+      register_again = true;
     }
+    const auto register_if_pending = [&] {
+      if (!register_again) return;
+      loc = LocalizeInSite(log.cloud, model, loc.T_site_base, c_.registration, true, held);
+      register_again = false;
+    };
+    if (o_.measure_top || !o_.measure_footprint) register_if_pending();
     // The stack as built (measure_top): move the model's top brick to the height its top face is
     // seen at, and register again when that moved it by more than twice the measurement's error.
     std::optional<Pose3> top_before;
@@ -743,7 +753,9 @@ bool Mission::Localize(VisitLog& log) {
       last_footprint_held = o_.hold_measured_position && workpiece_.bricks.size() > 1;
       model.bricks = workpiece_.bricks;
       loc = LocalizeInSite(log.cloud, model, loc.T_site_base, c_.registration, true, held);
+      register_again = false;
     }
+    register_if_pending();  // the footprint did not change the model
     log.registration_report = loc.registration.BriefReport();
     log.cloud_labels = loc.registration.labels;
     // Trust is judged on the workpiece's pose in the base frame: that is what placing a brick
