@@ -696,7 +696,7 @@ bool Mission::Localize(VisitLog& log) {
       loc = LocalizeInSite(log.cloud, model, loc.T_site_base, c_.registration, true, held);
       register_again = false;
     };
-    if (o_.measure_top || !o_.measure_footprint) register_if_pending();
+    if (o_.measure_top) register_if_pending();  // the top face is measured on the final pose, as before
     // The stack as built (measure_top): move the model's top brick to the height its top face is
     // seen at, and register again when that moved it by more than twice the measurement's error.
     std::optional<Pose3> top_before;
