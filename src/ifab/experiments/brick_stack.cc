@@ -220,12 +220,14 @@ nlohmann::json AsBuiltSummary(const Setup& setup) {
   for (int i = 0; i < 6; ++i) offsets_deg.push_back(RadToDeg(a.joint_offsets[i]));
   // The arm's kinematic error at the flange, at the park pose and over a few working poses.
   const Vector6d q_park = setup.mission_options.q_park;
+  // Against the design chain (the stack's may carry its kinematic calibration by now).
+  const RobotModel design = LoadRobotModel(setup.sim_options.urdf);
   double flange_max = 0.0;
   RandomStream rng(1);
   for (int k = 0; k < 20; ++k) {
     Vector6d q = q_park;
     for (int i = 0; i < 6; ++i) q[i] += rng.Uniform(-0.5, 0.5);
-    flange_max = std::max(flange_max, a.FlangeErrorAt(setup.parts.robot, q));
+    flange_max = std::max(flange_max, a.FlangeErrorAt(design, q));
   }
   return {{"world", "as-built"},
           {"brick_category", setup.tolerances.brick_category},
@@ -237,7 +239,7 @@ nlohmann::json AsBuiltSummary(const Setup& setup) {
           {"base_compliance_deg_per_knm", RadToDeg(a.base_compliance) * 1e3},
           {"base_seat_sigma_deg", RadToDeg(a.base_seat_sigma)},
           {"arm_joint_offsets_deg", offsets_deg},
-          {"arm_flange_error_mm", {{"park", 1e3 * a.FlangeErrorAt(setup.parts.robot, q_park)}, {"max_of_20_poses", 1e3 * flange_max}}},
+          {"arm_flange_error_mm", {{"park", 1e3 * a.FlangeErrorAt(design, q_park)}, {"max_of_20_poses", 1e3 * flange_max}}},
           {"arm_gravity_compliance_deg_per_knm", {RadToDeg(a.gravity_compliance[0]) * 1e3, RadToDeg(a.gravity_compliance[1]) * 1e3}},
           {"encoder_noise_deg", RadToDeg(a.encoder_noise)},
           {"calibration_cube_edge_error_mm", mm3(a.cube_size_error)},
@@ -255,8 +257,7 @@ nlohmann::json AsBuiltSummary(const Setup& setup) {
 
 }  // namespace
 
-Pose3 CalibrateMount(const Setup& setup, std::uint64_t seed, const RunContext& ctx, nlohmann::json* info,
-                     RangeBiasCompensation* compensation) {
+void CalibrateMount(Setup& setup, std::uint64_t seed, const RunContext& ctx, nlohmann::json* info) {
   const sequencer::LaserCalibrationPlan& plan = setup.calibration;
   RandomStream rng(seed + 7919);
   // Named draws, last argument first (gcc's order; C++ leaves a call's order open).
@@ -279,7 +280,8 @@ Pose3 CalibrateMount(const Setup& setup, std::uint64_t seed, const RunContext& c
   const CalibrationSummary& cs = cal.mount;
   if (!cs.IsUsable()) throw std::runtime_error("arm laser calibration failed: " + cs.message);
   if (cal.bias && !cal.bias->usable) throw std::runtime_error("arm laser range bias: " + cal.bias->message);
-  *compensation = cal.compensation;
+  setup.parts.assembly.range_bias = cal.compensation;
+  Pose3 mount = cs.T_tool0_laser;
   // Scoring only: how far the calibrated mount is from the simulator's true one.
   const Pose3 e = sim.true_T_tool0_arm_laser().inverse() * cs.T_tool0_laser;
   const auto v = XyzRpyFromPose(e);
@@ -299,7 +301,20 @@ Pose3 CalibrateMount(const Setup& setup, std::uint64_t seed, const RunContext& c
     (*info)["uncompensated_error_vs_true_mm"] = {1e3 * u[0], 1e3 * u[1], 1e3 * u[2]};
     (*info)["uncompensated_error_vs_true_deg"] = {RadToDeg(u[3]), RadToDeg(u[4]), RadToDeg(u[5])};
   }
-  return cs.T_tool0_laser;
+  if (cal.kinematics) {
+    const KinematicCalibration& k = *cal.kinematics;
+    ctx.Progress(k.BriefReport());
+    for (const auto& w : cal.views_left_out) ctx.Progress("  view left out: " + w);
+    (*info)["arm_kinematics"] = {{"usable", k.usable},       {"message", k.message},
+                                 {"views", k.views},         {"rms_design", k.rms_design},
+                                 {"rms_fitted", k.rms_fitted}, {"view_rms_design", k.view_rms_design},
+                                 {"view_rms_fitted", k.view_rms_fitted}};
+    if (k.usable) {
+      setup.parts.robot.arm_chain = ChainWithLinkErrors(setup.parts.robot.arm_chain, k.link_errors);
+      mount = k.T_tool0_laser;
+    }
+  }
+  setup.parts.T_tool0_arm_laser = mount;
 }
 
 namespace {
@@ -311,7 +326,7 @@ nlohmann::json RunBrickStack(const RunContext& ctx) {
   DrawWorld(setup, ctx.seed);
   nlohmann::json mount_info = {{"source", "design"}};
   if (setup.calibrate_mount) {
-    setup.parts.T_tool0_arm_laser = CalibrateMount(setup, ctx.seed, ctx, &mount_info, &setup.parts.assembly.range_bias);
+    CalibrateMount(setup, ctx.seed, ctx, &mount_info);
     // The same lasers, warmer by the warm-up and the calibration's time.
     setup.sim_options.seconds_since_power_on = mount_info["laser_on_seconds"].get<double>();
   }

@@ -41,8 +41,9 @@ Setup LoadSetup(const ConfigNode& c);
 /// Draw this seed's as-built world and machine into `s.sim_options` (nothing for `world: exact`).
 void DrawWorld(Setup& s, std::uint64_t seed);
 /// Calibrate the arm laser's mount (and, if the plan says how, its range bias) on a cube before
-/// the mission (Sec. V-C); `info` gets a summary, `compensation` the identified bias model.
-Pose3 CalibrateMount(const Setup& setup, std::uint64_t seed, const RunContext& ctx, nlohmann::json* info,
-                     RangeBiasCompensation* compensation);
+/// the mission (Sec. V-C), into `setup.parts`: the mount, the identified bias model for scan
+/// assembly and, when the plan fits the arm's kinematics and the fit is usable, the corrected arm
+/// chain (the mount then goes with it). `info` gets a summary.
+void CalibrateMount(Setup& setup, std::uint64_t seed, const RunContext& ctx, nlohmann::json* info);
 
 }  // namespace ifab::experiments

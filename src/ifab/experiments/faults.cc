@@ -102,7 +102,7 @@ nlohmann::json RunFaults(const RunContext& ctx) {
   DrawWorld(setup, ctx.seed);
   nlohmann::json mount_info = {{"source", "design"}};
   if (setup.calibrate_mount) {
-    setup.parts.T_tool0_arm_laser = CalibrateMount(setup, ctx.seed, ctx, &mount_info, &setup.parts.assembly.range_bias);
+    CalibrateMount(setup, ctx.seed, ctx, &mount_info);
     setup.sim_options.seconds_since_power_on = mount_info["laser_on_seconds"].get<double>();  // the lasers, warmer
   }
 

@@ -330,6 +330,17 @@ void ApplyMountOverrides(const ConfigNode& mounts, RobotModel& model) {
   read("gripper", model.T_tool0_gripper);
 }
 
+KDL::Chain ChainWithLinkErrors(const KDL::Chain& design, const std::vector<Pose3>& link_errors) {
+  KDL::Chain chain;
+  for (unsigned i = 0; i < design.getNrOfSegments(); ++i) {
+    const KDL::Segment& s = design.getSegment(i);
+    const Pose3 tip = i < link_errors.size() ? ToPose3(s.getFrameToTip()) * link_errors[i] : ToPose3(s.getFrameToTip());
+    // KDL keeps the joint's own frame; the segment's frame to tip carries the link length.
+    chain.addSegment(KDL::Segment(s.getName(), s.getJoint(), ToKdl(tip), s.getInertia()));
+  }
+  return chain;
+}
+
 Pose3 RobotModel::ArmForwardKinematics(const Vector6d& q) const {
   KDL::ChainFkSolverPos_recursive fk(arm_chain);
   KDL::JntArray joints(6);

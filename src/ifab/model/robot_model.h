@@ -49,6 +49,11 @@ RobotModel ParseRobotModel(const std::string& urdf_text, const std::string& name
 /// arm_base, gripper, each `[x, y, z, roll, pitch, yaw]`.
 void ApplyMountOverrides(const ConfigNode& mounts, RobotModel& model);
 
+/// The chain with a pose error after each segment's frame to tip (tip = design tip * error; a
+/// segment beyond `link_errors` keeps its design). The as-built arm of the simulator and the arm
+/// as its kinematic calibration found it (perception/kinematic_calibration.h).
+KDL::Chain ChainWithLinkErrors(const KDL::Chain& design, const std::vector<Pose3>& link_errors);
+
 /// Convert between KDL frames and Pose3.
 Pose3 ToPose3(const KDL::Frame& f);
 KDL::Frame ToKdl(const Pose3& p);

@@ -26,6 +26,7 @@ struct RayPoint {
 struct SweepPoint {
   Eigen::Vector3d p_laser{Eigen::Vector3d::Zero()};  ///< in the laser frame (scan plane z = 0)
   Pose3 T_base_tool0{Pose3::Identity()};             ///< flange at the beam's time stamp
+  Eigen::Matrix<double, 6, 1> q{Eigen::Matrix<double, 6, 1>::Zero()};  ///< joint angles then [rad]
   double t{0.0};                                     ///< beam time stamp (host clock) [s]
   int scan{0};                                       ///< index of its scan in the sweep
   int beam{0};                                       ///< beam index in its scan

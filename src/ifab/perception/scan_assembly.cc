@@ -55,9 +55,9 @@ AssembledSweep AssembleSweep(const std::vector<LaserScan>& scans, const std::vec
       p.t = t;
       p.scan = static_cast<int>(k);
       p.beam = static_cast<int>(i);
+      p.q = q_series[a].value + s * (q_series[a + 1].value - q_series[a].value);
       if (options.interpolation == ArmInterpolation::kJoint) {
-        const Vector6d q = q_series[a].value + s * (q_series[a + 1].value - q_series[a].value);
-        p.T_base_tool0 = robot.T_base_arm_base * robot.ArmForwardKinematics(q);
+        p.T_base_tool0 = robot.T_base_arm_base * robot.ArmForwardKinematics(p.q);
       } else {
         p.T_base_tool0 = Interpolate(sample_poses[a], sample_poses[a + 1], s);
       }

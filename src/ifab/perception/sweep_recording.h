@@ -15,6 +15,9 @@ struct SweepRecording {
   std::vector<LaserScan> scans;
   std::vector<JointState> joint_states;
   std::vector<SyncPulse> sync_pulses;  ///< empty when times are host times already
+  /// The IMU's accelerometer over the sweep (host time; empty if none was recorded): the base's
+  /// tilt while the arm moved (its weight tilts the base on its tracks).
+  std::vector<AccelSample> accel;
 };
 
 }  // namespace ifab

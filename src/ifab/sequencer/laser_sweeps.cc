@@ -9,6 +9,7 @@
 #include "ifab/core/angles.h"
 #include "ifab/core/config.h"
 #include "ifab/perception/scan_assembly.h"
+#include "ifab/sequencer/tilt.h"
 
 namespace ifab::sequencer {
 
@@ -183,22 +184,28 @@ void SweepRecorder::Drain(SweepRecording* rec) {
   for (const auto& p : other.sync_pulses) {
     if (p.device == DeviceId::kArmLaser) laser_sync_.AddPulse(p);
     if (p.device == DeviceId::kArm) arm_sync_.AddPulse(p);
+    if (p.device == DeviceId::kGyro) gyro_sync_.AddPulse(p);
   }
   for (const auto& s : scans) laser_sync_.AddPacket(s.stamp);
   for (const auto& j : joints) arm_sync_.AddPacket(j.stamp);
   other.base_laser_scans = robot_.TakeLaserScans(DeviceId::kBaseLaser);
   other.gyro_samples = robot_.TakeGyroSamples();
-  if (on_other_data) on_other_data(std::move(other));
+  other.accel_samples = robot_.TakeAccelSamples();
+  // The accelerometer rides in the gyro's packets: the gyro's clock maps both.
+  for (const auto& g : other.gyro_samples) gyro_sync_.AddPacket(g.stamp);
   if (rec) {
     rec->scans = std::move(scans);
     rec->joint_states = std::move(joints);
+    for (AccelSample a : other.accel_samples)
+      if (gyro_sync_.Apply(a.stamp)) rec->accel.push_back(a);
   }
+  if (on_other_data) on_other_data(std::move(other));
 }
 
 LaserCalibrationPlan LaserCalibrationPlan::FromConfig(const ConfigNode& config) {
   config.ExpectMap();
   config.ExpectKeys({"cube_in_base", "cube_size", "sweeps", "scan_posture_deg", "beam_stride", "min_range",
-                     "crop_radius", "calibration", "range_bias", "warmup_s"});
+                     "crop_radius", "calibration", "range_bias", "warmup_s", "kinematics", "level_with_imu"});
   LaserCalibrationPlan plan;
   const auto cb = config["cube_in_base"].AsNumbers(3);
   plan.cube_in_base = Eigen::Vector3d(cb[0], cb[1], DegToRad(cb[2]));
@@ -216,6 +223,8 @@ LaserCalibrationPlan LaserCalibrationPlan::FromConfig(const ConfigNode& config) 
   config.ReadNonNegative("crop_radius", plan.crop_radius);
   if (auto o = config.Find("calibration")) plan.calibration = CalibrationOptions::FromConfig(*o);
   if (auto b = config.Find("range_bias")) plan.range_bias = RangeBiasPlan::FromConfig(*b);
+  config.Read("level_with_imu", plan.level_with_imu);
+  if (auto k = config.Find("kinematics")) plan.kinematics = KinematicCalibrationOptions::FromConfig(*k);
   return plan;
 }
 
@@ -273,6 +282,7 @@ std::vector<CalibrationSweep> RecordCubeSweeps(SweepRecorder& recorder, const Ro
     if (progress) progress(name);
     SweepRecording rec = recorder.Record(plan.cube_in_base.head<2>(), plan.scan_posture, plan.sweeps[k], k % 2 == 1, name);
     std::vector<SweepPoint> points = AssembleSweep(rec.scans, rec.joint_states, model, assembly).points;
+    if (plan.level_with_imu) LevelSweepPoints(points, rec.accel);
     if (plan.crop_radius > 0.0) {
       std::erase_if(points, [&](const SweepPoint& p) {
         const Eigen::Vector3d p_base = p.T_base_tool0 * (model.T_tool0_arm_laser * p.p_laser);
@@ -329,7 +339,45 @@ ArmLaserCalibration IdentifyMountAndRangeBias(const std::vector<CalibrationSweep
   for (auto& sw : compensated) CompensateRangeBias(sw.points, out.bias->T_tool0_laser, out.compensation, &targets);
   if (progress) progress("calibrating the arm laser mount (compensated sweeps)");
   out.mount = CalibrateLaserMount(compensated, solved, out.bias->T_tool0_laser, calibration);
+  out.cube_sweeps_compensated = std::move(compensated);
   return out;
+}
+
+void IdentifyArmKinematics(const KDL::Chain& design, const std::vector<CalibrationSweep>& cube_sweeps,
+                           const std::vector<RegistrationBody>& bodies, const CalibrationSummary& mount,
+                           const CalibrationOptions& calibration, const KinematicCalibrationOptions& options,
+                           ArmLaserCalibration& out) {
+  // The targets held where the joint solve put them: a view alone then finds the mount that its
+  // posture's arm error makes of the true one.
+  std::vector<RegistrationBody> held = bodies;
+  // The cube alone is held: the as-built floor is flat only locally, and each view sees its own
+  // patch of it, so the ground stays free in every view.
+  for (std::size_t b = 0; b < held.size() && b < mount.bodies.size(); ++b) {
+    held[b].T_base_body = mount.bodies[b].T_base_body;
+    held[b].free = held[b].name != "cube";
+    if (held[b].free) held[b].fixed = {true, true, false, false, false, true};  // a plane: its height and tilt
+  }
+  out.views.clear();
+  out.views_left_out.clear();
+  for (const CalibrationSweep& sweep : cube_sweeps) {
+    if (sweep.points.empty()) continue;
+    const CalibrationSummary s = CalibrateLaserMount({sweep}, held, mount.T_tool0_laser, calibration);
+    if (!s.IsUsable()) {  // a view that does not fix the mount alone says nothing here
+      std::string why = s.message + (s.fit.consistent ? "" : "; fit: " + s.fit.message);
+      for (const auto& u : s.unconstrained) why += "; free: " + u;
+      out.views_left_out.push_back(sweep.name + ": " + why);
+      continue;
+    }
+    FlangeObservation v;
+    v.name = sweep.name;
+    // The sweep turns one joint evenly about its middle: the mean posture is the middle one.
+    for (const SweepPoint& p : sweep.points) v.q += p.q;
+    v.q /= static_cast<double>(sweep.points.size());
+    v.T_tool0_laser = s.T_tool0_laser;
+    v.covariance = s.covariance;
+    out.views.push_back(v);
+  }
+  out.kinematics = CalibrateArmKinematics(design, out.views, mount.T_tool0_laser, options);
 }
 
 ArmLaserCalibration CalibrateArmLaserAndRangeBias(hal::Robot& robot, const RobotModel& model,
@@ -365,6 +413,7 @@ ArmLaserCalibration CalibrateArmLaserAndRangeBias(hal::Robot& robot, const Robot
         spec.view = view;
         SweepRecording rec = recorder.Record(plan.cube_in_base.head<2>(), plan.scan_posture, spec, k % 2 == 1, name);
         std::vector<SweepPoint> points = AssembleSweep(rec.scans, rec.joint_states, model, assembly).points;
+        if (plan.level_with_imu) LevelSweepPoints(points, rec.accel);
         if (!points.empty()) {
           // Keep the patch below the laser (design mount): the floor is flat only locally.
           const SweepPoint& mid = points[points.size() / 2];
@@ -387,16 +436,22 @@ ArmLaserCalibration CalibrateArmLaserAndRangeBias(hal::Robot& robot, const Robot
     failed.mount_uncompensated = failed.mount;
     return failed;
   }
+  ArmLaserCalibration out;
   if (!plan.range_bias) {
-    ArmLaserCalibration out;
     if (progress) progress("calibrating the arm laser mount");
     out.mount = CalibrateLaserMount(cube_sweeps, bodies, model.T_tool0_arm_laser, plan.calibration);
     out.mount_uncompensated = out.mount;
-    return out;
+    out.cube_sweeps_compensated = std::move(cube_sweeps);  // nothing to compensate: as recorded
+  } else {
+    out = IdentifyMountAndRangeBias(cube_sweeps, floor_sweeps, bodies, model.T_tool0_arm_laser, plan.calibration,
+                                    *plan.range_bias, progress);
+    out.floor_sweeps = std::move(floor_sweeps);
   }
-  ArmLaserCalibration out = IdentifyMountAndRangeBias(cube_sweeps, floor_sweeps, bodies, model.T_tool0_arm_laser,
-                                                      plan.calibration, *plan.range_bias, progress);
-  out.floor_sweeps = std::move(floor_sweeps);
+  if (plan.kinematics && out.mount.IsUsable()) {
+    if (progress) progress("fitting the arm's kinematic errors to the calibration views");
+    IdentifyArmKinematics(model.arm_chain, out.cube_sweeps_compensated, bodies, out.mount, plan.calibration,
+                          *plan.kinematics, out);
+  }
   return out;
 }
 

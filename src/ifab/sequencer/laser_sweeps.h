@@ -15,6 +15,7 @@
 #include "ifab/hal/robot.h"
 #include "ifab/model/robot_model.h"
 #include "ifab/perception/calibration.h"
+#include "ifab/perception/kinematic_calibration.h"
 #include "ifab/perception/range_bias.h"
 #include "ifab/perception/sweep_recording.h"
 #include "ifab/sync/clock_sync.h"
@@ -86,6 +87,7 @@ struct DrainedData {
   std::vector<SyncPulse> sync_pulses;
   std::vector<LaserScan> base_laser_scans;
   std::vector<GyroSample> gyro_samples;
+  std::vector<AccelSample> accel_samples;  ///< raw stamps (the sweep's own copy is synced)
 };
 
 /// Drives the arm laser through sweeps and returns them in host time, the devices' clocks mapped
@@ -118,7 +120,7 @@ class SweepRecorder {
   arm::ArmPrimitives& arm_;
   Vector6d q_;
   SweepRecorderOptions options_;
-  DeviceClockSync laser_sync_, arm_sync_;
+  DeviceClockSync laser_sync_, arm_sync_, gyro_sync_;
 };
 
 /// The sweeps that identify the arm laser's range bias together with its mount (range_bias.h):
@@ -159,9 +161,15 @@ struct LaserCalibrationPlan {
                                                  ///< flat floor holds only near it
   CalibrationOptions calibration;                ///< the solver's options
   std::optional<RangeBiasPlan> range_bias;       ///< set: identify the range bias with the mount
+  /// Each scan's flange pose in the base levelled by the IMU's accelerometer (tilt.h
+  /// LevelSweepPoints): the arm's weight tilts the base differently at every calibration posture.
+  /// false: the base taken as rigid (the paper); also when a recording holds no accelerometer.
+  bool level_with_imu{true};
+  /// set: fit the arm's kinematic errors to the cube views after the mount (kinematic_calibration.h)
+  std::optional<KinematicCalibrationOptions> kinematics;
 
   /// Reads `{cube_in_base: [x, y, yaw_deg], cube_size, sweeps: [...], scan_posture_deg: [6],
-  /// beam_stride, min_range, crop_radius, calibration: {...}, range_bias: {...}}`; `cube_in_base`
+  /// beam_stride, min_range, crop_radius, calibration: {...}, range_bias: {...}, kinematics: {...}, level_with_imu}`; `cube_in_base`
   /// and `sweeps` are required.
   static LaserCalibrationPlan FromConfig(const ConfigNode& config);
 
@@ -195,7 +203,22 @@ struct ArmLaserCalibration {
   std::optional<RangeBiasSummary> bias;    ///< set when the plan has range_bias
   RangeBiasCompensation compensation;      ///< for scan assembly: the plan's options with the model (empty: none)
   std::vector<CalibrationSweep> floor_sweeps;  ///< raw floor sweeps (for inspection)
+  std::vector<CalibrationSweep> cube_sweeps_compensated;  ///< the sweeps the mount was solved from (the
+                                                          ///< bias compensated when it was identified)
+  /// set when the plan has `kinematics` and the mount is usable: the per-view mounts and the arm's
+  /// fitted errors; when usable, the mount to use with the corrected chain is kinematics->T_tool0_laser
+  std::vector<FlangeObservation> views;
+  std::vector<std::string> views_left_out;  ///< a view that does not fix the mount alone, and why
+  std::optional<KinematicCalibration> kinematics;
 };
+
+/// Each cube sweep alone against the targets where `mount` put them (its own mount: the arm's
+/// error at that view's posture), then the arm's kinematic errors fitted to those views.
+/// `mount` must be usable.
+void IdentifyArmKinematics(const KDL::Chain& design, const std::vector<CalibrationSweep>& cube_sweeps,
+                           const std::vector<RegistrationBody>& bodies, const CalibrationSummary& mount,
+                           const CalibrationOptions& calibration, const KinematicCalibrationOptions& options,
+                           ArmLaserCalibration& out);
 
 /// CalibrateArmLaser, and when the plan has `range_bias`: also records the floor sweeps, identifies
 /// the bias with the mount and the targets' poses from all sweeps (starting from the first mount

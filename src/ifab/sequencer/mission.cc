@@ -33,7 +33,7 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
                 "learn_placement_bias", "placement_bias_per_position", "placement_bias_prior_m", "placement_scatter_m", "placement_bias_walk_m", "placement_bias_adapt_noise",
                 "full_covariance_prior", "max_reapproaches",
                 "reapproach_tolerance", "reapproach_distance", "reapproach_speed", "tilt_compensation", "tilt_settle",
-                "tilt_window", "attitude_prior_deg", "floor_prior_on_imu_tilt", "height_prior_m", "registration_attitude", "imu_tilt_sigma_deg", "check_placement", "gate_placement_check", "placement_correction", "check_against", "hold_fused_look", "look_footprint", "min_brick_inliers", "max_scan_gap",
+                "tilt_window", "attitude_prior_deg", "floor_prior_on_imu_tilt", "height_prior_m", "registration_attitude", "level_sweeps", "imu_tilt_sigma_deg", "check_placement", "gate_placement_check", "placement_correction", "check_against", "hold_fused_look", "look_footprint", "min_brick_inliers", "max_scan_gap",
                 "sensor_wait_timeout", "protective_field", "protective_field_points", "protective_field_margin",
                 "obstacle_wait_timeout", "max_stamp_lag", "max_gyro_rate_factor", "arm_retries", "pick_retries",
                 "drive_retries"});
@@ -108,6 +108,7 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
     else t->Fail("imu or free");
   }
   c.ReadPositive("imu_tilt_sigma_deg", o.imu_tilt_sigma_deg);
+  c.Read("level_sweeps", o.level_sweeps);
   c.Read("check_placement", o.check_placement);
   c.Read("gate_placement_check", o.gate_placement_check);
   c.Read("placement_correction", o.placement_correction);
@@ -637,8 +638,10 @@ Mission::Sweep Mission::SweepWorkpiece(VisitLog& log, int sweep) {
   // from the model's face (Localize); until then from its neighbours' normal.
   ScanAssemblyOptions as_read = c_.assembly;
   as_read.range_bias.compensate = false;
-  const std::vector<RayPoint> swept =
-      AssembleCloud(arm_scans_, joint_states_, c_.robot, c_.T_tool0_arm_laser, as_read);
+  std::vector<SweepPoint> points = AssembleSweep(arm_scans_, joint_states_, c_.robot, as_read).points;
+  if (o_.level_sweeps)
+    if (const auto up = MeanUp(accel_, sweep_t0, sweep_t1)) LevelSweepPoints(points, accel_, *up);
+  const std::vector<RayPoint> swept = ToBaseFrame(points, c_.T_tool0_arm_laser);
   const Eigen::Vector3d p_stack_base = T_site_base.inverse(Eigen::Isometry) * p_top;
   for (const RayPoint& p : swept)
     if ((p.p - p_stack_base).head<2>().norm() < o_.crop_radius) out.raw_cloud.push_back(p);

@@ -198,6 +198,12 @@ struct MissionOptions {
   bool look_footprint{false};
   int min_brick_inliers{100};        ///< a checked brick with fewer points is not measured
   RegistrationAttitude registration_attitude{RegistrationAttitude::kImu};  ///< `registration_attitude: imu | free`
+  /// Each scan of a sweep into the base as it stood on average over the sweep, from the
+  /// accelerometer (tilt.h LevelSweepPoints): the arm turning during the sweep rocks the base on its
+  /// tracks. false: the base taken as rigid for the sweep (eq. 6 as written). Off by default: seeds
+  /// 1-6 gained nothing (long +0.12 +- 0.06, short -0.05 +- 0.06 mm; session 25): the rocking within
+  /// one sweep is small, and the accelerometer's noise over the window adds as much.
+  bool level_sweeps{false};
   /// [deg] std of the IMU's roll and pitch at standstill, for the covariance of a registration
   /// whose tilt it holds: the MTi-G-700's residual turn-on bias (0.5 mg, data/sensors/mti_g_700.yaml)
   /// is 0.03 deg, and its sensor frame sits within 0.1 deg of its base plate (Xsens MTi user

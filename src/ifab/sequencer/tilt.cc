@@ -32,6 +32,26 @@ Pose3 CompensateTilt(const Pose3& T_site_base_ref, const Eigen::Vector3d& up_ref
   return T_site_base_ref * delta;
 }
 
+bool LevelSweepPoints(std::vector<SweepPoint>& points, const std::vector<AccelSample>& accel,
+                      const Eigen::Vector3d& up_ref, double half_window) {
+  if (points.empty()) return true;
+  // One attitude per scan (a scan lasts 25 ms; the base rocks over seconds).
+  std::vector<std::pair<int, Eigen::Matrix3d>> per_scan;
+  for (const SweepPoint& p : points) {
+    if (!per_scan.empty() && per_scan.back().first == p.scan) continue;
+    const auto up = MeanUp(accel, p.t - half_window, p.t + half_window, 5);
+    if (!up) return false;
+    per_scan.emplace_back(p.scan, TiltChange(up_ref, *up));
+  }
+  std::size_t k = 0;
+  for (SweepPoint& p : points) {
+    while (per_scan[k].first != p.scan) ++k;
+    p.T_base_tool0.linear() = per_scan[k].second * p.T_base_tool0.linear();
+    p.T_base_tool0.translation() = per_scan[k].second * p.T_base_tool0.translation();
+  }
+  return true;
+}
+
 double TiltAngle(const Eigen::Vector3d& up_a, const Eigen::Vector3d& up_b) {
   return std::acos(std::clamp(up_a.normalized().dot(up_b.normalized()), -1.0, 1.0));
 }

@@ -13,6 +13,7 @@
 
 #include "ifab/core/se3.h"
 #include "ifab/msgs/msgs.h"
+#include "ifab/perception/cloud.h"
 
 namespace ifab::sequencer {
 
@@ -41,6 +42,15 @@ Pose3 LevelledPose(const Pose3& T_site_base, const Eigen::Vector3d& up_base);
 /// IMU's: the held directions get the IMU's tilt variance `tilt_sigma`^2 [rad^2] instead of zero.
 Eigen::Matrix<double, 6, 6> WithHeldTiltCovariance(const Pose3& T_base_site, Eigen::Matrix<double, 6, 6> covariance,
                                                    double tilt_sigma);
+
+/// Puts a sweep's flange poses into the base frame at attitude `up_ref`, from the accelerometer at each scan's
+/// time (the mean up over +-half_window): the arm's weight tilts the base on its tracks as the arm
+/// moves, by hundredths of a degree between the postures of one calibration, which is millimetres
+/// at the laser's range. The base turns about its origin, as in CompensateTilt; its heading is
+/// kept. Returns false (and leaves the points) when the samples do not cover every scan.
+/// `up_ref`: the up direction (base frame) of the attitude the points are put into (+z: level).
+bool LevelSweepPoints(std::vector<SweepPoint>& points, const std::vector<AccelSample>& accel,
+                      const Eigen::Vector3d& up_ref = Eigen::Vector3d::UnitZ(), double half_window = 0.25);
 
 /// Angle between two up directions [rad].
 double TiltAngle(const Eigen::Vector3d& up_a, const Eigen::Vector3d& up_b);

@@ -112,14 +112,11 @@ AsBuiltTolerances AsBuiltTolerances::Load(const std::string& path) { return From
 RobotModel AsBuilt::TrueRobot(const RobotModel& design) const {
   if (exact || link_errors.empty()) return design;
   RobotModel r = design;
-  KDL::Chain chain;
-  for (unsigned i = 0; i < design.arm_chain.getNrOfSegments(); ++i) {
-    const KDL::Segment& s = design.arm_chain.getSegment(i);
-    const Pose3 tip = ToPose3(s.getFrameToTip()) * link_errors[std::min<std::size_t>(i, link_errors.size() - 1)];
-    // KDL keeps the joint's own frame; the segment's frame to tip carries the link length.
-    chain.addSegment(KDL::Segment(s.getName(), s.getJoint(), ToKdl(tip), s.getInertia()));
-  }
-  r.arm_chain = chain;
+  // A segment past the drawn errors takes the last one (as drawn: one per segment).
+  std::vector<Pose3> errors;
+  for (unsigned i = 0; i < design.arm_chain.getNrOfSegments(); ++i)
+    errors.push_back(link_errors[std::min<std::size_t>(i, link_errors.size() - 1)]);
+  r.arm_chain = ChainWithLinkErrors(design.arm_chain, errors);
   return r;
 }
 

@@ -14,20 +14,23 @@ namespace {
 
 constexpr double kG = 9.80665;
 
-// Accelerometer samples of a base at rest with attitude R_site_base: white noise at the
+// One accelerometer sample of a base at rest with attitude R_site_base: white noise at the
 // MTi-G-700's 80 ug/sqrt(Hz) (400 Hz) and a constant bias, as the simulator makes them.
+AccelSample Sample(const Eigen::Matrix3d& R_site_base, const Eigen::Vector3d& bias, Seconds t, RandomStream& rng) {
+  const double sigma = kG * 80e-6 * std::sqrt(400.0);
+  AccelSample s;
+  s.stamp.t = t;
+  // Draws named, last coordinate first: gcc's order of a call's arguments (C++ leaves it open).
+  const double nz = rng.Normal(sigma), ny = rng.Normal(sigma), nx = rng.Normal(sigma);
+  s.specific_force = R_site_base.transpose() * Eigen::Vector3d(0, 0, kG) + bias + Eigen::Vector3d(nx, ny, nz);
+  return s;
+}
+
+// The mission's 2 s window of samples.
 std::vector<AccelSample> Samples(const Eigen::Matrix3d& R_site_base, const Eigen::Vector3d& bias, Seconds t0,
                                  RandomStream& rng) {
   std::vector<AccelSample> out;
-  const double sigma = kG * 80e-6 * std::sqrt(400.0);
-  for (int i = 0; i < 800; ++i) {  // the mission's 2 s window
-    AccelSample s;
-    s.stamp.t = t0 + i / 400.0;
-    // Draws named, last coordinate first: gcc's order of a call's arguments (C++ leaves it open).
-    const double nz = rng.Normal(sigma), ny = rng.Normal(sigma), nx = rng.Normal(sigma);
-    s.specific_force = R_site_base.transpose() * Eigen::Vector3d(0, 0, kG) + bias + Eigen::Vector3d(nx, ny, nz);
-    out.push_back(s);
-  }
+  for (int i = 0; i < 800; ++i) out.push_back(Sample(R_site_base, bias, t0 + i / 400.0, rng));
   return out;
 }
 
@@ -111,6 +114,49 @@ TEST(Tilt, NoSamplesNoTilt) {
   EXPECT_FALSE(MeanUp(none, 0.0, 1.0).has_value());
   const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
   EXPECT_TRUE(TiltChange(up, up).isIdentity(1e-12));
+}
+
+// A sweep during which the arm's weight rocks the base by 0.05 deg: levelled scan by scan from
+// the accelerometer, every flange pose lands where the base standing level would put it.
+TEST(Tilt, LevelSweepPointsTakesOutTheTiltOfEachScan) {
+  RandomStream rng(5);
+  const Seconds duration = 6.0;
+  auto roll_at = [&](Seconds t) { return DegToRad(0.1 + 0.05 * t / duration); };
+  auto pitch_at = [&](Seconds t) { return DegToRad(-0.03 * t / duration); };
+  auto R_at = [&](Seconds t) { return PoseFromXyzRpy(0, 0, 0, roll_at(t), pitch_at(t), 0.0).linear(); };
+  std::vector<AccelSample> accel;
+  for (int k = 0; k < 6 * 400 + 400; ++k) {
+    const Seconds t = -0.5 + k / 400.0;
+    accel.push_back(Sample(R_at(t), Eigen::Vector3d::Zero(), t, rng));
+  }
+  std::vector<SweepPoint> points, level;
+  for (int scan = 0; scan < 240; ++scan) {
+    const Seconds t = scan * duration / 240;
+    SweepPoint p;
+    p.scan = scan;
+    p.t = t;
+    // The flange 2 m out and 1.5 m up, in the base as it stands (tilted).
+    p.T_base_tool0 = PoseFromXyzRpy(2.0, 0.3 * std::sin(t), 1.5, 0.2, 1.2, 0.1 * t);
+    points.push_back(p);
+    SweepPoint l = p;
+    l.T_base_tool0 = Pose3(R_at(t)) * p.T_base_tool0;  // the level base sees the tilted one turned
+    level.push_back(l);
+  }
+  std::vector<SweepPoint> levelled = points;
+  ASSERT_TRUE(LevelSweepPoints(levelled, accel));
+  double worst_raw = 0.0, worst = 0.0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    worst_raw = std::max(worst_raw, TranslationDistance(points[i].T_base_tool0, level[i].T_base_tool0));
+    worst = std::max(worst, TranslationDistance(levelled[i].T_base_tool0, level[i].T_base_tool0));
+  }
+  std::printf("flange 2.5 m from the base origin: worst error %.3f mm as tilted, %.3f mm levelled\n", 1e3 * worst_raw,
+              1e3 * worst);
+  EXPECT_GT(worst_raw, 0.004);
+  EXPECT_LT(worst, 0.25 * worst_raw);  // what is left: the accelerometer noise over the window
+  // No accelerometer: nothing to level with, the points stay.
+  std::vector<SweepPoint> untouched = points;
+  EXPECT_FALSE(LevelSweepPoints(untouched, {}));
+  EXPECT_TRUE(untouched[7].T_base_tool0.isApprox(points[7].T_base_tool0));
 }
 
 }  // namespace
