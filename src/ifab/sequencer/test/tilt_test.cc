@@ -123,7 +123,9 @@ TEST(Tilt, LevelSweepPointsTakesOutTheTiltOfEachScan) {
   const Seconds duration = 6.0;
   auto roll_at = [&](Seconds t) { return DegToRad(0.1 + 0.05 * t / duration); };
   auto pitch_at = [&](Seconds t) { return DegToRad(-0.03 * t / duration); };
-  auto R_at = [&](Seconds t) { return PoseFromXyzRpy(0, 0, 0, roll_at(t), pitch_at(t), 0.0).linear(); };
+  auto R_at = [&](Seconds t) -> Eigen::Matrix3d {
+    return PoseFromXyzRpy(0, 0, 0, roll_at(t), pitch_at(t), 0.0).linear();  // a copy, not a view of the temporary
+  };
   std::vector<AccelSample> accel;
   for (int k = 0; k < 6 * 400 + 400; ++k) {
     const Seconds t = -0.5 + k / 400.0;
