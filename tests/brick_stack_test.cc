@@ -84,9 +84,12 @@ TEST(BrickStack, ShortVariantPlacesEveryBrickNearItsDesignedPose) {
   // a change there shows here first), the placed bricks within a millimetre. Pinned value since
   // the simulated laser's beams straddle and cross an edge with the width they have at the edge
   // (issue 12, session 15): 3.462 mm; 3.648 mm before (the footprint at the beam's own range),
-  // 3.724 mm with the polar method's draws before the ziggurat (issue 15).
+  // 3.724 mm with the polar method's draws before the ziggurat (issue 15). 4.722 mm since each
+  // calibration scan is levelled by the accelerometer (issue 12, session 25): the exact world's base
+  // does not tilt, so here the levelling brings only the accelerometer's noise, and the six-sweep
+  // plan fixes the mount's x (along the flange) weakly, so it moved by 1.3 mm.
   EXPECT_EQ(r["as_built"]["world"].get<std::string>(), "exact");
-  EXPECT_NEAR(r["arm_laser_mount"]["error_vs_true_mm"][0].get<double>(), 3.462, 0.01);
+  EXPECT_NEAR(r["arm_laser_mount"]["error_vs_true_mm"][0].get<double>(), 4.722, 0.01);
   EXPECT_NEAR(r["brick_error_long_mm_mean"].get<double>(), 0.60, 1.0);
   EXPECT_NEAR(r["brick_error_short_mm_mean"].get<double>(), 0.63, 1.0);
   EXPECT_LE(r["brick_error_mm_max"].get<double>(), 1.66 + 1.5);
