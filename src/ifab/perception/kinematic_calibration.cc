@@ -252,8 +252,18 @@ KinematicCalibration CalibrateArmKinematics(const KDL::Chain& design, const std:
     for (std::size_t k = 0; k < p.offsets.size(); ++k) out.joint_offsets.push_back(x[12 + static_cast<int>(k)]);
   out.T_tool0_laser = p.Mount(x);
   out.T_targets_correction = Exp6(x.head<6>());
-  out.usable = std::isfinite(out.rms_fitted) && out.rms_fitted <= out.rms_design + 1e-9;
-  out.message = out.usable ? "fitted" : "the fit does not explain the views better than the design chain";
+  // Usable only when the fitted model explains the views to the std each one reports, and its errors
+  // stay within their prior (a chi-square test at about 3 sigma): a fit that leaves the views
+  // disagreeing has put into the arm what belongs elsewhere, and the design chain is kept.
+  // With the prior's residuals counted, each error brings one residual and one unknown: what is
+  // left is the views' 6 per view less the mount and the targets' frame.
+  const double dof = std::max(1, n - 12);
+  const double sum_sq = r.squaredNorm();
+  const double bound = dof + 3.0 * std::sqrt(2.0 * dof);
+  out.usable = std::isfinite(sum_sq) && sum_sq <= bound;
+  out.message = out.usable ? "fitted"
+                           : fmt::format("the fitted views still disagree beyond their std (chi-square {:.1f} > {:.1f})",
+                                         sum_sq, bound);
   return out;
 }
 

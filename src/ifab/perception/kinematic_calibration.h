@@ -57,7 +57,7 @@ struct KinematicCalibrationOptions {
 };
 
 struct KinematicCalibration {
-  bool usable{false};
+  bool usable{false};  ///< the fitted views agree within their stds (else keep the design chain)
   std::string message;
   std::vector<Pose3> link_errors;        ///< per segment of the chain: tip = design tip * error
   std::vector<double> joint_offsets;     ///< [rad] joints 2-5 with the joint-offset model (else empty;
