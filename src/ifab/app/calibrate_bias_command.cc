@@ -79,6 +79,7 @@ json Run(const Options& o) {
             {"sweeps", sweeps_info},
             {"floor_sweeps", floor_info},
             {"warnings", cal.mount.warnings}};
+  if (cal.ground_extent) j["ground_extent"] = GroundExtentToJson(*cal.ground_extent);
   if (cal.bias) {
     const RangeBiasSummary& b = *cal.bias;
     const double max_std = cal.compensation.max_std_fraction * cal.compensation.sigma_along;

@@ -11,6 +11,7 @@
 
 #include "ifab/experiments/atomic_file.h"
 #include "ifab/experiments/brick_stack_setup.h"
+#include "ifab/experiments/perception_json.h"
 #include "ifab/core/angles.h"
 #include "ifab/core/data_path.h"
 #include "ifab/experiments/experiments.h"
@@ -300,6 +301,11 @@ void CalibrateMount(Setup& setup, std::uint64_t seed, const RunContext& ctx, nlo
     const auto u = XyzRpyFromPose(sim.true_T_tool0_arm_laser().inverse() * cal.mount_uncompensated.T_tool0_laser);
     (*info)["uncompensated_error_vs_true_mm"] = {1e3 * u[0], 1e3 * u[1], 1e3 * u[2]};
     (*info)["uncompensated_error_vs_true_deg"] = {RadToDeg(u[3]), RadToDeg(u[4]), RadToDeg(u[5])};
+  }
+  if (cal.ground_extent) {
+    const GroundExtent& g = *cal.ground_extent;
+    ctx.Progress("calibration: " + g.message);
+    (*info)["ground_extent"] = GroundExtentToJson(g);
   }
   if (cal.kinematics) {
     const KinematicCalibration& k = *cal.kinematics;

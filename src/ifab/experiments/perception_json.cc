@@ -18,6 +18,13 @@ json MatrixToJson(const Eigen::MatrixXd& m) {
   return rows;
 }
 
+json GroundExtentToJson(const GroundExtent& g) {
+  json rings = json::array();
+  for (const auto& r : g.rings)
+    rings.push_back({{"outer_m", r.outer}, {"points", r.points}, {"mean_mm", r.mean_mm}, {"se_mm", r.se_mm}});
+  return {{"radius_m", g.radius}, {"limited", g.limited}, {"message", g.message}, {"rings", rings}};
+}
+
 json PoseToJson(const Pose3& pose) {
   const auto v = XyzRpyFromPose(pose);
   return {{"xyz", {v[0], v[1], v[2]}},

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "ifab/core/se3.h"
+#include "ifab/perception/calibration.h"
 #include "ifab/perception/registration.h"
 #include "ifab/experiments/sweep_io.h"
 
@@ -21,6 +22,8 @@ nlohmann::json StdToJson(const Matrix6d& covariance);
 nlohmann::json BodyToJson(const RegisteredBody& body, bool usable);
 /// The noise model used and the test of the fit (fit_quality.h).
 nlohmann::json FitToJson(const FitQuality& fit);
+/// How far the calibration took the ground as one plane, and the rings that said so.
+nlohmann::json GroundExtentToJson(const GroundExtent& extent);
 
 /// Write a sweep file (experiments/sweep_io.h's format), in full or not at all.
 void SaveSweep(const std::string& path, const SweepRecording& sweep, bool raw_stamps = false);

@@ -1,8 +1,10 @@
 #include "ifab/perception/calibration.h"
 
+#include <Eigen/Cholesky>
 #include <Eigen/SVD>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -83,6 +85,113 @@ std::vector<RegistrationBody> CubeOnGroundBodies(double size, const Pose3& T_bas
   RigidObject ground{"ground", Pose3::Identity(), {Plane{Eigen::Vector3d::UnitZ(), 0.0}}};
   RigidObject cube{"cube", Pose3::Identity(), {Box{Eigen::Vector3d::Constant(size)}}};
   return {{"ground", T_base_ground, {ground}, true}, {"cube", T_base_cube, {cube}, true}};
+}
+
+GroundExtentOptions GroundExtentOptions::FromConfig(const ConfigNode& c) {
+  c.ExpectMap();
+  c.ExpectKeys({"enabled", "ring_width_m", "significance", "max_height_m", "min_ring_points"});
+  GroundExtentOptions o;
+  c.Read("enabled", o.enabled);
+  c.ReadPositive("ring_width_m", o.ring_width);
+  c.ReadPositive("significance", o.significance);
+  c.ReadPositive("max_height_m", o.max_height);
+  c.Read("min_ring_points", o.min_ring_points);
+  if (o.min_ring_points < 3) c["min_ring_points"].Fail("at least 3 (a plane)");
+  return o;
+}
+
+GroundExtent MeasureGroundExtent(const std::vector<CalibrationSweep>& sweeps, const Pose3& T_tool0_laser,
+                                 const Pose3& T_base_ground, const Pose3& T_base_cube, double cube_size,
+                                 double max_radius, const GroundExtentOptions& options) {
+  IFAB_CHECK(options.ring_width > 0.0);
+  struct GroundReturn {
+    double rho, x, y, h;  // distance from the cube's centre; position and height in the ground frame
+  };
+  std::vector<GroundReturn> ground;
+  const Pose3 T_ground_base = T_base_ground.inverse(Eigen::Isometry);
+  const Pose3 T_cube_base = T_base_cube.inverse(Eigen::Isometry);
+  const Eigen::Vector2d centre = T_base_cube.translation().head<2>();
+  const double footprint = 0.5 * cube_size + 0.5 * options.ring_width;  // the cube and its foot's shadowed edge
+  for (const CalibrationSweep& sweep : sweeps)
+    for (const SweepPoint& p : sweep.points) {
+      const Eigen::Vector3d p_base = p.T_base_tool0 * (T_tool0_laser * p.p_laser);
+      const Eigen::Vector3d g = T_ground_base * p_base;
+      if (std::abs(g.z()) > options.max_height) continue;
+      const Eigen::Vector3d c = T_cube_base * p_base;
+      if (std::abs(c.x()) < footprint && std::abs(c.y()) < footprint) continue;
+      ground.push_back({(p_base.head<2>() - centre).norm(), g.x(), g.y(), g.z()});
+    }
+  GroundExtent out;
+  double farthest = 0.0;
+  for (const auto& g : ground) farthest = std::max(farthest, g.rho);
+  max_radius = std::min(max_radius, farthest);
+  out.radius = max_radius;
+  if (ground.empty()) {
+    out.message = "no ground returns about the cube";
+    return out;
+  }
+  // The innermost ring that clears the cube's corners is taken as flat: the cube stands on it.
+  const double w = options.ring_width;
+  double r = w * std::ceil((std::sqrt(0.5) * cube_size + 0.5 * w) / w);
+  while (r < max_radius) {
+    Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d b = Eigen::Vector3d::Zero();
+    int inside = 0;
+    for (const auto& g : ground)
+      if (g.rho < r) {
+        const Eigen::Vector3d a(1.0, g.x, g.y);
+        A += a * a.transpose();
+        b += a * g.h;
+        ++inside;
+      }
+    const double outer = std::min(r + w, max_radius);
+    double sum = 0.0, sum2 = 0.0;
+    int n = 0;
+    Eigen::Vector3d plane = Eigen::Vector3d::Zero();
+    const Eigen::LDLT<Eigen::Matrix3d> ldlt(A);
+    const bool fitted = inside >= options.min_ring_points && ldlt.info() == Eigen::Success && ldlt.isPositive();
+    if (fitted) plane = ldlt.solve(b);
+    for (const auto& g : ground)
+      if (g.rho >= r && g.rho < outer) {
+        const double e = g.h - plane.dot(Eigen::Vector3d(1.0, g.x, g.y));
+        sum += e;
+        sum2 += e * e;
+        ++n;
+      }
+    GroundExtent::Ring ring;
+    ring.outer = outer;
+    ring.points = n;
+    if (fitted && n >= options.min_ring_points) {
+      const double mean = sum / n;
+      const double var = std::max(0.0, (sum2 - n * mean * mean) / (n - 1));
+      ring.mean_mm = 1e3 * mean;
+      ring.se_mm = 1e3 * std::sqrt(var / n);
+      out.rings.push_back(ring);
+      if (std::abs(mean) > options.significance * std::sqrt(var / n)) {
+        out.radius = r;
+        out.limited = true;
+        out.message = fmt::format("the ground is one plane out to {:.2f} m from the cube: the ring to {:.2f} m lies "
+                                  "{:+.2f} mm off it ({:.2f} mm standard error, {} returns)",
+                                  r, outer, ring.mean_mm, ring.se_mm, n);
+        return out;
+      }
+    } else {
+      out.rings.push_back(ring);
+    }
+    r = outer;
+  }
+  out.message = fmt::format("the ground is one plane out to {:.2f} m from the cube (every ring within {:.0f} standard "
+                            "errors of it)", max_radius, options.significance);
+  return out;
+}
+
+void CropSweeps(std::vector<CalibrationSweep>& sweeps, const Pose3& T_tool0_laser, const Eigen::Vector2d& center,
+                double radius) {
+  for (CalibrationSweep& sweep : sweeps)
+    std::erase_if(sweep.points, [&](const SweepPoint& p) {
+      const Eigen::Vector3d p_base = p.T_base_tool0 * (T_tool0_laser * p.p_laser);
+      return (p_base.head<2>() - center).norm() > radius;
+    });
 }
 
 Pose3 AveragePoses(const std::vector<Pose3>& poses) {

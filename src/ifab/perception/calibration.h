@@ -71,6 +71,45 @@ CalibrationSummary CalibrateLaserMount(const std::vector<CalibrationSweep>& swee
 /// "cube" (a box of edge `size` whose centre is at T_base_cube).
 std::vector<RegistrationBody> CubeOnGroundBodies(double size, const Pose3& T_base_cube, double ground_z = 0.0);
 
+/// How far about the cube the calibration may take the ground as one plane. A finished floor bows
+/// by millimetres over a metre (DIN 18202 allows 4 mm under a 1 m straightedge), and a plane fitted
+/// over a wider patch than is flat leans the mount by as much. Measured from the ground's own
+/// returns: rings about the cube, from the inside out, are accepted while each ring's mean height
+/// above the plane fitted to the rings inside it stays within `significance` standard errors.
+struct GroundExtentOptions {
+  bool enabled{true};
+  double ring_width{0.1};      ///< [m]
+  double significance{3.0};    ///< standard errors of a ring's mean height that mark it off the plane
+  double max_height{0.03};     ///< [m] a return farther off the ground plane is not the ground's
+  int min_ring_points{30};     ///< a ring with fewer returns carries no evidence and is accepted
+
+  /// Reads {enabled, ring_width_m, significance, max_height_m, min_ring_points}.
+  static GroundExtentOptions FromConfig(const ConfigNode& config);
+};
+
+struct GroundExtent {
+  double radius{0.0};  ///< [m] horizontally about the cube's centre (base frame)
+  bool limited{false};  ///< a ring departed from the plane before `max_radius`
+  struct Ring {
+    double outer{0.0};    ///< [m] its outer radius
+    int points{0};
+    double mean_mm{0.0};  ///< its mean height above the plane of the rings inside
+    double se_mm{0.0};    ///< the mean's standard error
+  };
+  std::vector<Ring> rings;  ///< tested rings, inside out (the last departed when `limited`)
+  std::string message;
+};
+
+/// The ground's planar extent (GroundExtentOptions) from the sweeps through `T_tool0_laser`, with
+/// the ground and cube where a solve put them; rings out to `max_radius`.
+GroundExtent MeasureGroundExtent(const std::vector<CalibrationSweep>& sweeps, const Pose3& T_tool0_laser,
+                                 const Pose3& T_base_ground, const Pose3& T_base_cube, double cube_size,
+                                 double max_radius, const GroundExtentOptions& options = {});
+
+/// Drops every return farther than `radius` horizontally from `center` (base frame).
+void CropSweeps(std::vector<CalibrationSweep>& sweeps, const Pose3& T_tool0_laser, const Eigen::Vector2d& center,
+                double radius);
+
 /// Mean of poses: mean translation, rotation the chordal L2 mean (projected mean of matrices).
 /// Used to average calibration trials from random initial guesses (Sec. V-C).
 Pose3 AveragePoses(const std::vector<Pose3>& poses);

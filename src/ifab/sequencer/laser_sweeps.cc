@@ -1,10 +1,13 @@
 #include "ifab/sequencer/laser_sweeps.h"
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
+#include <variant>
 
 #include "ifab/core/angles.h"
 #include "ifab/core/config.h"
@@ -231,7 +234,7 @@ LaserCalibrationPlan LaserCalibrationPlan::FromConfig(const ConfigNode& config) 
 RangeBiasPlan RangeBiasPlan::FromConfig(const ConfigNode& c) {
   c.ExpectMap();
   c.ExpectKeys({"floor_heights", "floor_aim", "floor_elevation_deg", "floor_joint", "floor_range_deg",
-                "floor_speed_deg_s", "floor_crop_radius", "identification", "compensation"});
+                "floor_speed_deg_s", "floor_crop_radius", "identification", "compensation", "ground_extent"});
   RangeBiasPlan p;
   if (auto h = c.Find("floor_heights")) {
     p.floor_heights = h->AsNumbers();
@@ -260,6 +263,7 @@ RangeBiasPlan RangeBiasPlan::FromConfig(const ConfigNode& c) {
   c.ReadPositive("floor_crop_radius", p.floor_crop_radius);
   if (auto o = c.Find("identification")) p.identification = RangeBiasOptions::FromConfig(*o);
   if (auto o = c.Find("compensation")) p.compensation = RangeBiasCompensation::FromConfig(*o);
+  if (auto o = c.Find("ground_extent")) p.ground_extent = GroundExtentOptions::FromConfig(*o);
   return p;
 }
 
@@ -319,24 +323,48 @@ ArmLaserCalibration IdentifyMountAndRangeBias(const std::vector<CalibrationSweep
   out.mount_uncompensated = CalibrateLaserMount(cube_sweeps, bodies, T_tool0_laser_guess, calibration);
   out.mount = out.mount_uncompensated;
   if (!out.mount.IsUsable()) return out;
-  // The bias with the mount and the targets, from where the first solve left them.
+  // The targets where the first solve left them.
   std::vector<RegistrationBody> solved = bodies;
   for (std::size_t b = 0; b < solved.size() && b < out.mount.bodies.size(); ++b)
     solved[b].T_base_body = out.mount.bodies[b].T_base_body;
-  std::vector<CalibrationSweep> all = cube_sweeps;
-  all.insert(all.end(), floor_sweeps.begin(), floor_sweeps.end());
-  if (progress) progress("identifying the arm laser's range bias");
-  out.bias = IdentifyRangeBias(all, solved, out.mount.T_tool0_laser, bias_plan.identification);
-  if (!out.bias->usable) return out;
-  out.compensation.model = out.bias->model;
-  // The mount again, from the cube sweeps with their ranges compensated and the returns the
-  // model is unsure of left out (this replaces a fixed minimum range and incidence).
-  // Each return's incidence from the cube and ground where the joint solve put them.
-  for (std::size_t b = 0; b < solved.size() && b < out.bias->T_base_body.size(); ++b)
-    solved[b].T_base_body = out.bias->T_base_body[b];
-  const Scene targets(solved);
-  std::vector<CalibrationSweep> compensated = cube_sweeps;
-  for (auto& sw : compensated) CompensateRangeBias(sw.points, out.bias->T_tool0_laser, out.compensation, &targets);
+  // The bias from the cube sweeps `cube` and the floor sweeps, starting from `solved` and the mount
+  // `T_tool0_laser`; then the cube
+  // sweeps compensated, with each return's incidence from the cube and ground where the joint
+  // solve put them (the returns the model is unsure of are left out: this replaces a fixed
+  // minimum range and incidence).
+  std::vector<CalibrationSweep> compensated;
+  auto identify = [&](const std::vector<CalibrationSweep>& cube, const Pose3& T_tool0_laser) {
+    std::vector<CalibrationSweep> all = cube;
+    all.insert(all.end(), floor_sweeps.begin(), floor_sweeps.end());
+    if (progress) progress("identifying the arm laser's range bias");
+    out.bias = IdentifyRangeBias(all, solved, T_tool0_laser, bias_plan.identification);
+    if (!out.bias->usable) return false;
+    out.compensation.model = out.bias->model;
+    for (std::size_t b = 0; b < solved.size() && b < out.bias->T_base_body.size(); ++b)
+      solved[b].T_base_body = out.bias->T_base_body[b];
+    const Scene targets(solved);
+    compensated = cube;
+    for (auto& sw : compensated) CompensateRangeBias(sw.points, out.bias->T_tool0_laser, out.compensation, &targets);
+    return true;
+  };
+  if (!identify(cube_sweeps, out.mount.T_tool0_laser)) return out;
+  // A floor is flat only locally. Where the compensated ground stops being one plane, the cube
+  // sweeps are cropped, and the bias is identified again from the cropped sweeps.
+  const auto ground = std::find_if(solved.begin(), solved.end(), [](const auto& b) { return b.name == "ground"; });
+  const auto cube = std::find_if(solved.begin(), solved.end(), [](const auto& b) { return b.name == "cube"; });
+  if (bias_plan.ground_extent.enabled && ground != solved.end() && cube != solved.end() && !cube->parts.empty() &&
+      !cube->parts[0].primitives.empty() && std::holds_alternative<Box>(cube->parts[0].primitives[0])) {
+    const double cube_size = std::get<Box>(cube->parts[0].primitives[0]).size.x();
+    out.ground_extent = MeasureGroundExtent(compensated, out.bias->T_tool0_laser, ground->T_base_body,
+                                            cube->T_base_body, cube_size, std::numeric_limits<double>::infinity(),
+                                            bias_plan.ground_extent);
+    spdlog::info("calibration: {}", out.ground_extent->message);
+    if (out.ground_extent->limited) {
+      std::vector<CalibrationSweep> cropped = cube_sweeps;
+      CropSweeps(cropped, out.bias->T_tool0_laser, cube->T_base_body.translation().head<2>(), out.ground_extent->radius);
+      if (!identify(cropped, out.bias->T_tool0_laser)) return out;
+    }
+  }
   if (progress) progress("calibrating the arm laser mount (compensated sweeps)");
   out.mount = CalibrateLaserMount(compensated, solved, out.bias->T_tool0_laser, calibration);
   out.cube_sweeps_compensated = std::move(compensated);

@@ -137,9 +137,12 @@ struct RangeBiasPlan {
                                          ///< flat only locally)
   RangeBiasOptions identification;       ///< the solver's options
   RangeBiasCompensation compensation;    ///< how the mission's sweeps apply the identified model
+  /// The cube sweeps' ground is cropped to where it is one plane before the mount's last solve.
+  GroundExtentOptions ground_extent;
 
   /// Reads {floor_heights, floor_aim, floor_elevation_deg, floor_joint (1-6), floor_range_deg,
-  /// floor_speed_deg_s, floor_crop_radius, identification: {...}, compensation: {...}}.
+  /// floor_speed_deg_s, floor_crop_radius, identification: {...}, compensation: {...},
+  /// ground_extent: {...}}.
   static RangeBiasPlan FromConfig(const ConfigNode& config);
 };
 
@@ -201,6 +204,7 @@ struct ArmLaserCalibration {
   CalibrationSummary mount;                ///< the mount, from the compensated cube sweeps when the bias is identified
   CalibrationSummary mount_uncompensated;  ///< the first solve, from the raw sweeps (eq. 6 as written)
   std::optional<RangeBiasSummary> bias;    ///< set when the plan has range_bias
+  std::optional<GroundExtent> ground_extent;  ///< the cube sweeps' planar ground (range_bias plans)
   RangeBiasCompensation compensation;      ///< for scan assembly: the plan's options with the model (empty: none)
   std::vector<CalibrationSweep> floor_sweeps;  ///< raw floor sweeps (for inspection)
   std::vector<CalibrationSweep> cube_sweeps_compensated;  ///< the sweeps the mount was solved from (the

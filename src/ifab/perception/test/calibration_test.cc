@@ -130,5 +130,47 @@ TEST(AveragePoses, AveragesTranslationAndRotation) {
   EXPECT_NEAR(RotationAngle(m, PoseFromXyzRpy(0, 0, 0, 0, 0, 0.2)), 0.0, 1e-12);
 }
 
+
+// A floor flat out to 0.7 m from the cube that bows beyond it (1 mm at 0.8 m, 4 mm at 0.9 m), seen
+// with 10 mm range noise: the ground is kept as one plane out to where it bows, within a ring; a
+// flat floor is kept out to its edge. Statistics over three noise seeds.
+TEST(GroundExtent, KeepsTheGroundOutToWhereItBows) {
+  const Pose3 cube = PoseFromXyzRpy(1.7, 0.0, 0.125, 0.0, 0.0, 0.2);
+  for (const bool bows : {true, false}) {
+    for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+      RandomStream rng(seed);
+      CalibrationSweep sweep;
+      sweep.name = "synthetic";
+      for (int i = 0; i < 60000; ++i) {
+        const double rho = 0.05 + 1.15 * std::sqrt(rng.Uniform(0.0, 1.0));
+        const double phi = rng.Uniform(-M_PI, M_PI);
+        const Eigen::Vector2d xy = cube.translation().head<2>() + rho * Eigen::Vector2d(std::cos(phi), std::sin(phi));
+        const Eigen::Vector3d c = cube.inverse(Eigen::Isometry) * Eigen::Vector3d(xy.x(), xy.y(), 0.0);
+        double z = 0.0;
+        if (std::abs(c.x()) < 0.125 && std::abs(c.y()) < 0.125) z = 0.25;  // the cube's top
+        else if (bows && rho > 0.7) z = 0.1 * (rho - 0.7) * (rho - 0.7);
+        SweepPoint p;  // the laser at the base origin, the flange at identity
+        p.p_laser = Eigen::Vector3d(xy.x(), xy.y(), z + rng.Normal(0.010));
+        sweep.points.push_back(p);
+      }
+      const GroundExtent g =
+          MeasureGroundExtent({sweep}, Pose3::Identity(), Pose3::Identity(), cube, 0.25, 1.2, GroundExtentOptions{});
+      SCOPED_TRACE(g.message);
+      if (bows) {
+        EXPECT_TRUE(g.limited);
+        EXPECT_GE(g.radius, 0.7 - 1e-9);
+        EXPECT_LE(g.radius, 0.9 + 1e-9);
+      } else {
+        EXPECT_FALSE(g.limited);
+        EXPECT_GT(g.radius, 1.15);
+      }
+      // Cropped to it, no return lies farther out.
+      std::vector<CalibrationSweep> cropped{sweep};
+      CropSweeps(cropped, Pose3::Identity(), cube.translation().head<2>(), g.radius);
+      for (const auto& p : cropped[0].points) EXPECT_LE((p.p_laser.head<2>() - cube.translation().head<2>()).norm(), g.radius);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace ifab
