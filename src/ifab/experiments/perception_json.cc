@@ -21,7 +21,14 @@ json MatrixToJson(const Eigen::MatrixXd& m) {
 json GroundExtentToJson(const GroundExtent& g) {
   json rings = json::array();
   for (const auto& r : g.rings)
-    rings.push_back({{"outer_m", r.outer}, {"points", r.points}, {"mean_mm", r.mean_mm}, {"se_mm", r.se_mm}});
+    rings.push_back({{"outer_m", r.outer},
+                     {"points", r.points},
+                     {"mean_mm", r.mean_mm},
+                     {"se_mm", r.se_mm},
+                     {"sectors", r.sectors},
+                     {"chi2", r.chi2},
+                     {"chi2_bound", r.bound},
+                     {"worst_sector_mm", r.worst_sector_mm}});
   return {{"radius_m", g.radius}, {"limited", g.limited}, {"message", g.message}, {"rings", rings}};
 }
 

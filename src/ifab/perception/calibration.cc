@@ -89,29 +89,53 @@ std::vector<RegistrationBody> CubeOnGroundBodies(double size, const Pose3& T_bas
 
 GroundExtentOptions GroundExtentOptions::FromConfig(const ConfigNode& c) {
   c.ExpectMap();
-  c.ExpectKeys({"enabled", "ring_width_m", "significance", "max_height_m", "min_ring_points"});
+  c.ExpectKeys({"enabled", "ring_width_m", "significance", "sectors", "max_height_m", "min_ring_points"});
   GroundExtentOptions o;
   c.Read("enabled", o.enabled);
   c.ReadPositive("ring_width_m", o.ring_width);
   c.ReadPositive("significance", o.significance);
+  c.ReadPositive("sectors", o.sectors);
   c.ReadPositive("max_height_m", o.max_height);
   c.Read("min_ring_points", o.min_ring_points);
   if (o.min_ring_points < 3) c["min_ring_points"].Fail("at least 3 (a plane)");
   return o;
 }
 
+namespace {
+
+// The chi-square quantile with k degrees of freedom at the upper tail probability of a two-sided
+// normal test at `sigmas` (Wilson and Hilferty 1931; within 1 % of the exact quantile for these
+// tails). With k = 1 it is sigmas^2: the one-sector test is the plain z-test of the mean.
+double ChiSquareBound(int k, double sigmas) {
+  if (k == 1) return sigmas * sigmas;
+  const double p = std::erfc(sigmas / std::sqrt(2.0));  // the tail probability
+  // The one-sided normal quantile of p, by bisection on erfc (monotone).
+  double lo = 0.0, hi = 40.0;
+  for (int i = 0; i < 100; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (0.5 * std::erfc(mid / std::sqrt(2.0)) > p ? lo : hi) = mid;
+  }
+  const double z = 0.5 * (lo + hi), a = 2.0 / (9.0 * k);
+  return k * std::pow(1.0 - a + z * std::sqrt(a), 3);
+}
+
+}  // namespace
+
 GroundExtent MeasureGroundExtent(const std::vector<CalibrationSweep>& sweeps, const Pose3& T_tool0_laser,
                                  const Pose3& T_base_ground, const Pose3& T_base_cube, double cube_size,
                                  double max_radius, const GroundExtentOptions& options) {
   IFAB_CHECK(options.ring_width > 0.0);
+  IFAB_CHECK(options.sectors >= 1);
   struct GroundReturn {
     double rho, x, y, h;  // distance from the cube's centre; position and height in the ground frame
+    int sector;           // of options.sectors equal angles about the cube's centre
   };
   std::vector<GroundReturn> ground;
   const Pose3 T_ground_base = T_base_ground.inverse(Eigen::Isometry);
   const Pose3 T_cube_base = T_base_cube.inverse(Eigen::Isometry);
   const Eigen::Vector2d centre = T_base_cube.translation().head<2>();
   const double footprint = 0.5 * cube_size + 0.5 * options.ring_width;  // the cube and its foot's shadowed edge
+  const int K = options.sectors;
   for (const CalibrationSweep& sweep : sweeps)
     for (const SweepPoint& p : sweep.points) {
       const Eigen::Vector3d p_base = p.T_base_tool0 * (T_tool0_laser * p.p_laser);
@@ -119,7 +143,9 @@ GroundExtent MeasureGroundExtent(const std::vector<CalibrationSweep>& sweeps, co
       if (std::abs(g.z()) > options.max_height) continue;
       const Eigen::Vector3d c = T_cube_base * p_base;
       if (std::abs(c.x()) < footprint && std::abs(c.y()) < footprint) continue;
-      ground.push_back({(p_base.head<2>() - centre).norm(), g.x(), g.y(), g.z()});
+      const Eigen::Vector2d d = p_base.head<2>() - centre;
+      const double turn = std::atan2(d.y(), d.x()) / (2.0 * M_PI) + 0.5;  // [0, 1]
+      ground.push_back({d.norm(), g.x(), g.y(), g.z(), std::min(K - 1, static_cast<int>(turn * K))});
     }
   GroundExtent out;
   double farthest = 0.0;
@@ -145,35 +171,91 @@ GroundExtent MeasureGroundExtent(const std::vector<CalibrationSweep>& sweeps, co
         ++inside;
       }
     const double outer = std::min(r + w, max_radius);
-    double sum = 0.0, sum2 = 0.0;
-    int n = 0;
+    std::vector<double> sum(static_cast<std::size_t>(K), 0.0), sum2(static_cast<std::size_t>(K), 0.0);
+    std::vector<int> n(static_cast<std::size_t>(K), 0);
     Eigen::Vector3d plane = Eigen::Vector3d::Zero();
     const Eigen::LDLT<Eigen::Matrix3d> ldlt(A);
     const bool fitted = inside >= options.min_ring_points && ldlt.info() == Eigen::Success && ldlt.isPositive();
-    if (fitted) plane = ldlt.solve(b);
+    // The plane's own uncertainty (the inside returns' scatter through (A^T A)^-1): extrapolated to
+    // the ring it leans opposite sectors opposite ways, which the sectors' test must not take for
+    // the floor's.
+    Eigen::Matrix3d plane_cov = Eigen::Matrix3d::Zero();
+    if (fitted) {
+      plane = ldlt.solve(b);
+      double ss = 0.0;
+      for (const auto& g : ground)
+        if (g.rho < r) ss += std::pow(g.h - plane.dot(Eigen::Vector3d(1.0, g.x, g.y)), 2);
+      plane_cov = ss / std::max(1, inside - 3) * ldlt.solve(Eigen::Matrix3d::Identity());
+    }
+    std::vector<Eigen::Vector3d> regressor(static_cast<std::size_t>(K), Eigen::Vector3d::Zero());
     for (const auto& g : ground)
       if (g.rho >= r && g.rho < outer) {
         const double e = g.h - plane.dot(Eigen::Vector3d(1.0, g.x, g.y));
-        sum += e;
-        sum2 += e * e;
-        ++n;
+        const auto k = static_cast<std::size_t>(g.sector);
+        sum[k] += e;
+        sum2[k] += e * e;
+        regressor[k] += Eigen::Vector3d(1.0, g.x, g.y);
+        ++n[k];
       }
     GroundExtent::Ring ring;
     ring.outer = outer;
-    ring.points = n;
-    if (fitted && n >= options.min_ring_points) {
-      const double mean = sum / n;
-      const double var = std::max(0.0, (sum2 - n * mean * mean) / (n - 1));
+    // The whole ring's mean and standard error (reported), and the sectors' test.
+    double all = 0.0, all2 = 0.0;
+    for (int k = 0; k < K; ++k) {
+      all += sum[static_cast<std::size_t>(k)];
+      all2 += sum2[static_cast<std::size_t>(k)];
+      ring.points += n[static_cast<std::size_t>(k)];
+    }
+    if (fitted && ring.points >= options.min_ring_points) {
+      const int m = ring.points;
+      const double mean = all / m;
       ring.mean_mm = 1e3 * mean;
-      ring.se_mm = 1e3 * std::sqrt(var / n);
+      ring.se_mm = 1e3 * std::sqrt(std::max(0.0, (all2 - m * mean * mean) / (m - 1)) / m);
+      // The tested sectors' means, with their covariance: each one's scatter over its returns, plus
+      // the plane's uncertainty at the sector's mean position (shared by all, so not diagonal).
+      std::vector<double> means;
+      std::vector<Eigen::Vector3d> at;
+      std::vector<double> own;
+      for (int k = 0; k < K; ++k) {
+        const auto i = static_cast<std::size_t>(k);
+        // One sector: the whole ring (K = 1 is the ring's mean test). Otherwise a sector with too
+        // few returns carries no evidence and is left out.
+        if (n[i] < (K == 1 ? options.min_ring_points : std::max(3, options.min_ring_points / K))) continue;
+        const double mk = sum[i] / n[i];
+        const double vk = std::max(0.0, (sum2[i] - n[i] * mk * mk) / (n[i] - 1));
+        if (vk <= 0.0) continue;
+        means.push_back(mk);
+        own.push_back(vk / n[i]);
+        at.push_back(regressor[i] / n[i]);
+        if (std::abs(mk) > std::abs(1e-3 * ring.worst_sector_mm)) ring.worst_sector_mm = 1e3 * mk;
+      }
+      ring.sectors = static_cast<int>(means.size());
+      if (ring.sectors > 0) {
+        const int S = ring.sectors;
+        Eigen::MatrixXd C(S, S);
+        Eigen::VectorXd mv(S);
+        for (int i = 0; i < S; ++i) {
+          mv[i] = means[static_cast<std::size_t>(i)];
+          for (int j = 0; j < S; ++j)
+            C(i, j) = at[static_cast<std::size_t>(i)].dot(plane_cov * at[static_cast<std::size_t>(j)]) +
+                      (i == j ? own[static_cast<std::size_t>(i)] : 0.0);
+        }
+        ring.chi2 = mv.dot(C.ldlt().solve(mv));
+      }
       out.rings.push_back(ring);
-      if (std::abs(mean) > options.significance * std::sqrt(var / n)) {
-        out.radius = r;
-        out.limited = true;
-        out.message = fmt::format("the ground is one plane out to {:.2f} m from the cube: the ring to {:.2f} m lies "
-                                  "{:+.2f} mm off it ({:.2f} mm standard error, {} returns)",
-                                  r, outer, ring.mean_mm, ring.se_mm, n);
-        return out;
+      if (ring.sectors > 0) {
+        out.rings.back().bound = ChiSquareBound(ring.sectors, options.significance);
+        if (ring.chi2 > out.rings.back().bound) {
+          out.radius = r;
+          out.limited = true;
+          out.message = fmt::format(
+              "the ground is one plane out to {:.2f} m from the cube: the ring to {:.2f} m lies off it (mean {:+.2f} mm, "
+              "{:.2f} mm standard error; sector farthest off {:+.2f} mm; chi-square {:.1f} over {} sectors > {:.1f}; "
+              "{} returns)",
+              r, outer, ring.mean_mm, ring.se_mm, ring.worst_sector_mm, ring.chi2, ring.sectors,
+              out.rings.back().bound, m);
+          return out;
+        }
       }
     } else {
       out.rings.push_back(ring);

@@ -74,16 +74,22 @@ std::vector<RegistrationBody> CubeOnGroundBodies(double size, const Pose3& T_bas
 /// How far about the cube the calibration may take the ground as one plane. A finished floor bows
 /// by millimetres over a metre (DIN 18202 allows 4 mm under a 1 m straightedge), and a plane fitted
 /// over a wider patch than is flat leans the mount by as much. Measured from the ground's own
-/// returns: rings about the cube, from the inside out, are accepted while each ring's mean height
-/// above the plane fitted to the rings inside it stays within `significance` standard errors.
+/// returns: rings about the cube, from the inside out, are accepted while the ring's height above
+/// the plane fitted to the rings inside it stays within `significance` standard errors. The ring is
+/// tested sector by sector: a floor that waves or twists lies above the plane on one side of the
+/// cube and below it on the other, which a whole ring's mean averages away.
 struct GroundExtentOptions {
   bool enabled{true};
   double ring_width{0.1};      ///< [m]
-  double significance{3.0};    ///< standard errors of a ring's mean height that mark it off the plane
+  /// Standard errors that mark a ring off the plane: with one sector, its mean height beyond this
+  /// many; with several, the sum of the sectors' squared z-scores beyond the chi-square quantile
+  /// of the same tail probability (two-sided normal at `significance`).
+  double significance{3.0};
+  int sectors{8};              ///< equal angles about the cube's centre; 1: the ring's mean alone
   double max_height{0.03};     ///< [m] a return farther off the ground plane is not the ground's
   int min_ring_points{30};     ///< a ring with fewer returns carries no evidence and is accepted
 
-  /// Reads {enabled, ring_width_m, significance, max_height_m, min_ring_points}.
+  /// Reads {enabled, ring_width_m, significance, sectors, max_height_m, min_ring_points}.
   static GroundExtentOptions FromConfig(const ConfigNode& config);
 };
 
@@ -95,6 +101,10 @@ struct GroundExtent {
     int points{0};
     double mean_mm{0.0};  ///< its mean height above the plane of the rings inside
     double se_mm{0.0};    ///< the mean's standard error
+    double chi2{0.0};     ///< sum over its sectors of (sector mean / its standard error)^2
+    int sectors{0};       ///< sectors with enough returns to be tested
+    double bound{0.0};    ///< the chi-square quantile chi2 was held against
+    double worst_sector_mm{0.0};  ///< the sector mean farthest off the plane
   };
   std::vector<Ring> rings;  ///< tested rings, inside out (the last departed when `limited`)
   std::string message;
