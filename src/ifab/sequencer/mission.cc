@@ -30,7 +30,7 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
                 "max_sweeps", "min_inliers", "max_localization_std_m", "max_localization_std_deg",
                 "max_localization_jump_m", "scan_distance", "scan_elevation_deg", "sweep_half_angle_deg",
                 "sweep_speed_deg_s", "crop_radius", "park_joints_deg", "localize", "place_bricks", "measure_top", "measure_footprint", "brick_size_sigma_mm", "hold_measured_position",
-                "learn_placement_bias", "placement_bias_per_position", "placement_bias_prior_m", "placement_scatter_m", "placement_bias_walk_m", "placement_bias_adapt_noise",
+                "learn_placement_bias", "placement_bias_per_position", "placement_bias_robot_part", "placement_bias_prior_m", "placement_scatter_m", "placement_bias_walk_m", "placement_bias_adapt_noise",
                 "full_covariance_prior", "max_reapproaches",
                 "reapproach_tolerance", "reapproach_distance", "reapproach_speed", "tilt_compensation", "tilt_settle",
                 "tilt_window", "attitude_prior_deg", "floor_prior_on_imu_tilt", "height_prior_m", "registration_attitude", "level_sweeps", "imu_tilt_sigma_deg", "check_placement", "gate_placement_check", "placement_correction", "check_against", "hold_fused_look", "look_footprint", "min_brick_inliers", "max_scan_gap",
@@ -60,6 +60,7 @@ MissionOptions MissionOptions::FromConfig(const ConfigNode& c) {
   c.Read("hold_measured_position", o.hold_measured_position);
   c.Read("learn_placement_bias", o.learn_placement_bias);
   c.Read("placement_bias_per_position", o.placement_bias_per_position);
+  c.Read("placement_bias_robot_part", o.placement_bias_robot_part);
   c.ReadPositive("placement_bias_prior_m", o.placement_bias.prior_std);
   c.ReadNonNegative("placement_scatter_m", o.placement_bias.scatter);
   c.ReadNonNegative("placement_bias_walk_m", o.placement_bias.walk);
@@ -138,7 +139,9 @@ Mission::Mission(hal::Robot& robot, MissionComponents components, MissionOptions
       step_gyro_(o_.max_stamp_lag),
       step_arm_(o_.max_stamp_lag),
       workpiece_(c_.site),
-      placement_bias_(o_.placement_bias, o_.placement_bias_per_position) {
+      placement_bias_(o_.placement_bias, !o_.placement_bias_per_position ? PlacementBiasScope::kRobot
+                                        : o_.placement_bias_robot_part ? PlacementBiasScope::kRobotAndPosition
+                                                                       : PlacementBiasScope::kPosition) {
   const Pose3& T = c_.robot.T_base_base_laser;
   estimator_ = std::make_unique<base::BaseStateEstimator>(c_.estimator, Pose2Of(T));
   commands_sent_ = std::make_unique<base::TrackCommandHistory>(c_.base_geometry.track_gauge);
@@ -827,20 +830,20 @@ bool Mission::Localize(VisitLog& log) {
 void Mission::LearnPlacementBias(const Eigen::Vector2d& offset, const Eigen::Vector2d& offset_std,
                                  const std::array<bool, 2>& measured, VisitLog& log) {
   const SiteBox& top = workpiece_.bricks.back();
-  PlacementBiasFilter& filter = placement_bias_.For(last_sent_->position);
+  const std::string& position = last_sent_->position;
   for (int a = 0; a < 2; ++a) {
     if (!measured[static_cast<std::size_t>(a)]) continue;
     // The miss along the box's axis a, in the base frame the brick was placed from: the bias
     // minus the correction sent, so the bias's look is the offset plus the correction.
     const Eigen::Vector2d u =
         (last_sent_->R_site_base.transpose() * top.T_site_box.linear().col(a).head<2>()).normalized();
-    filter.Update(u, offset[a] + u.dot(last_sent_->correction), offset_std[a]);
+    placement_bias_.Update(position, u, offset[a] + u.dot(last_sent_->correction), offset_std[a]);
   }
   // The looks were at the last placement's bias; the next may have moved (all stands: the stack
   // grew for each of them).
   placement_bias_.Predict();
-  log.placement_bias_mm = 1e3 * filter.bias();
-  log.placement_bias_std_mm = 1e3 * filter.covariance().diagonal().cwiseSqrt();
+  log.placement_bias_mm = 1e3 * placement_bias_.Bias(position);
+  log.placement_bias_std_mm = 1e3 * placement_bias_.Covariance(position).diagonal().cwiseSqrt();
   spdlog::debug("{}: last brick (placed from {}) off by {:+.2f} / {:+.2f} mm (box x / y); placement bias now "
                 "{:+.2f} / {:+.2f} mm (+-{:.2f} / {:.2f}, base frame)", log.position, last_sent_->position,
                 1e3 * offset.x(), 1e3 * offset.y(), log.placement_bias_mm.x(), log.placement_bias_mm.y(),
@@ -969,7 +972,7 @@ bool Mission::CheckPlacement(int k, VisitLog& log) {
     // look at the bias (both axes, with the look's covariance).
     const Eigen::Matrix2d R = last_sent_->R_site_base;
     const Eigen::Vector2d miss_site = (T_site_brick.translation() - last_sent_->intended).head<2>();
-    PlacementBiasFilter& filter = placement_bias_.For(last_sent_->position);
+    const std::string& position = last_sent_->position;
     const Eigen::Vector2d z = R.transpose() * miss_site + last_sent_->correction;
     const Eigen::Matrix2d z_cov = R.transpose() * look_cov * R;
     // Where the model holds the brick: where the look put it, or (hold_fused_look) that fused
@@ -977,11 +980,11 @@ bool Mission::CheckPlacement(int k, VisitLog& log) {
     Pose3 T_site_held = T_site_brick;
     if (o_.hold_fused_look)
       T_site_held.translation().head<2>() =
-          last_sent_->intended.head<2>() + R * (filter.FusedMiss(z, z_cov) - last_sent_->correction);
-    filter.Update(z, z_cov);
+          last_sent_->intended.head<2>() + R * (placement_bias_.FusedMiss(position, z, z_cov) - last_sent_->correction);
+    placement_bias_.Update(position, z, z_cov);
     placement_bias_.Predict();
-    log.placement_bias_mm = 1e3 * filter.bias();
-    log.placement_bias_std_mm = 1e3 * filter.covariance().diagonal().cwiseSqrt();
+    log.placement_bias_mm = 1e3 * placement_bias_.Bias(position);
+    log.placement_bias_std_mm = 1e3 * placement_bias_.Covariance(position).diagonal().cwiseSqrt();
     // The model holds the brick where the look put it (the first stays where it was meant to be:
     // it defines the site), so the next registrations fit the stack as built and do not pull the
     // frame towards each brick's miss.
@@ -1043,7 +1046,7 @@ bool Mission::PlaceBrick(int k, VisitLog& log) {
   }
   const Pose3 T_site_intended = T_site_goal;  // where the brick should land (the model's belief)
   const Eigen::Matrix2d R_site_base = Eigen::Rotation2Dd(Pose2Of(T_site_base).theta).toRotationMatrix();
-  if (o_.learn_placement_bias) T_site_goal.translation().head<2>() -= R_site_base * placement_bias_.For(log.position).bias();
+  if (o_.learn_placement_bias) T_site_goal.translation().head<2>() -= R_site_base * placement_bias_.Bias(log.position);
   correction_applied_.setZero();
   if (o_.placement_correction) {
     // The mean of this stand's last offsets: postures change slowly as the stack grows (a round
@@ -1100,7 +1103,7 @@ bool Mission::PlaceBrick(int k, VisitLog& log) {
   workpiece_.bricks.push_back({fmt::format("brick_{}", k), T_site_intended, c_.site.brick});
   if (o_.learn_placement_bias)
     last_sent_ = SentBrick{workpiece_.bricks.size() - 1, T_site_intended.translation(), R_site_base,
-                           placement_bias_.For(log.position).bias(), log.position};
+                           placement_bias_.Bias(log.position), log.position};
   log.bricks_placed.push_back(k);
   ++bricks_placed_;
   return true;

@@ -116,6 +116,10 @@ struct MissionOptions {
   /// other incidences, so other range-bias residuals); the robot comes back to each stand within
   /// centimetres. Every filter walks at each placement (the stack grows for all of them).
   bool placement_bias_per_position{false};
+  /// With placement_bias_per_position: a stand's miss is the robot's part, learned from every
+  /// stand's looks, plus the stand's own (PlacementBiasScope::kRobotAndPosition); the first brick
+  /// at a stand is then sent against what the other stands showed. false: the stands apart.
+  bool placement_bias_robot_part{false};
   /// Re-approaches (reverse and forward along the goal's line) when the maneuver ends with a
   /// sideways offset beyond the controller's tolerance; 0: the paper's single maneuver.
   int max_reapproaches{2};

@@ -64,17 +64,104 @@ bool ArmCanExplainMiss(const Eigen::Vector2d& miss, const Eigen::Matrix2d& look_
   return d2 <= kChi2Dof2P999;  // false for a NaN
 }
 
-PlacementBiasLearner::PlacementBiasLearner(PlacementBiasOptions options, bool per_position)
-    : o_(options), per_position_(per_position), shared_(options) {}
+PlacementBiasLearner::PlacementBiasLearner(PlacementBiasOptions options, PlacementBiasScope scope)
+    : o_(options), scope_(scope), shared_(options) {
+  if (scope_ == PlacementBiasScope::kRobotAndPosition) {
+    x_ = Eigen::VectorXd::Zero(2);
+    P_ = Eigen::MatrixXd::Identity(2, 2) * o_.prior_std * o_.prior_std;
+  }
+}
 
 PlacementBiasFilter& PlacementBiasLearner::For(const std::string& position) {
-  if (!per_position_) return shared_;
+  if (scope_ == PlacementBiasScope::kRobot) return shared_;
   return by_position_.try_emplace(position, o_).first->second;
+}
+
+int PlacementBiasLearner::Block(const std::string& position) {
+  const auto it = blocks_.find(position);
+  if (it != blocks_.end()) return it->second;
+  // A new stand: its own part enters with the arm's prior, uncorrelated with what is known.
+  const int n = static_cast<int>(x_.size());
+  x_.conservativeResize(n + 2);
+  x_.tail<2>().setZero();
+  P_.conservativeResize(n + 2, n + 2);
+  P_.rightCols<2>().setZero();
+  P_.bottomRows<2>().setZero();
+  P_.bottomRightCorner<2, 2>() = Eigen::Matrix2d::Identity() * o_.prior_std * o_.prior_std;
+  blocks_[position] = n;
+  return n;
+}
+
+Eigen::MatrixXd PlacementBiasLearner::H(int block) const {
+  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(2, x_.size());
+  h.leftCols<2>().setIdentity();
+  h.block<2, 2>(0, block).setIdentity();
+  return h;
+}
+
+Eigen::Vector2d PlacementBiasLearner::Bias(const std::string& position) {
+  if (scope_ != PlacementBiasScope::kRobotAndPosition) return For(position).bias();
+  return H(Block(position)) * x_;
+}
+
+Eigen::Matrix2d PlacementBiasLearner::Covariance(const std::string& position) {
+  if (scope_ != PlacementBiasScope::kRobotAndPosition) return For(position).covariance();
+  const Eigen::MatrixXd h = H(Block(position));
+  return h * P_ * h.transpose();
+}
+
+void PlacementBiasLearner::AdaptNoise(double nis, int dof) {
+  // As PlacementBiasFilter::AdaptNoise: from the third look on.
+  if (!o_.adapt_noise || looks_ < 2) return;
+  nis_sum_ += nis;
+  nis_dof_ += dof;
+  noise_scale_ = std::max(1.0, nis_sum_ / nis_dof_);
+}
+
+void PlacementBiasLearner::UpdateJoint(int /*block*/, const Eigen::MatrixXd& Hm, const Eigen::VectorXd& z,
+                                       const Eigen::MatrixXd& R) {
+  const Eigen::VectorXd innovation = z - Hm * x_;
+  const Eigen::MatrixXd HP = Hm * P_;
+  const Eigen::MatrixXd prior = HP * Hm.transpose();
+  AdaptNoise(innovation.dot((prior + R).ldlt().solve(innovation)), static_cast<int>(z.size()));
+  const Eigen::MatrixXd S = prior + noise_scale_ * R;
+  const Eigen::MatrixXd K = S.ldlt().solve(HP).transpose();  // P H^T S^-1 (S symmetric)
+  x_ += K * innovation;
+  P_ -= K * HP;
+  P_ = 0.5 * (P_ + P_.transpose());
+  ++looks_;
+}
+
+void PlacementBiasLearner::Update(const std::string& position, const Eigen::Vector2d& u, double z, double std) {
+  if (scope_ != PlacementBiasScope::kRobotAndPosition) return For(position).Update(u, z, std);
+  const int b = Block(position);
+  const Eigen::MatrixXd Hm = u.transpose() * H(b);
+  UpdateJoint(b, Hm, Eigen::VectorXd::Constant(1, z),
+              Eigen::MatrixXd::Constant(1, 1, std * std + o_.scatter * o_.scatter));
+}
+
+void PlacementBiasLearner::Update(const std::string& position, const Eigen::Vector2d& z,
+                                  const Eigen::Matrix2d& covariance) {
+  if (scope_ != PlacementBiasScope::kRobotAndPosition) return For(position).Update(z, covariance);
+  const int b = Block(position);
+  UpdateJoint(b, H(b), z, covariance + Eigen::Matrix2d::Identity() * o_.scatter * o_.scatter);
+}
+
+Eigen::Vector2d PlacementBiasLearner::FusedMiss(const std::string& position, const Eigen::Vector2d& z,
+                                                const Eigen::Matrix2d& covariance) {
+  if (scope_ != PlacementBiasScope::kRobotAndPosition) return For(position).FusedMiss(z, covariance);
+  const Eigen::Matrix2d scatter = Eigen::Matrix2d::Identity() * o_.scatter * o_.scatter;
+  const Eigen::Matrix2d expected = Covariance(position) + scatter;
+  const Eigen::Matrix2d look = noise_scale_ * (covariance + scatter) - scatter;
+  const Eigen::Vector2d bias = Bias(position);
+  return bias + expected * (expected + look).ldlt().solve(z - bias);
 }
 
 void PlacementBiasLearner::Predict() {
   shared_.Predict();
   for (auto& [name, filter] : by_position_) filter.Predict();
+  if (scope_ == PlacementBiasScope::kRobotAndPosition)
+    P_.diagonal().array() += 0.5 * o_.walk * o_.walk;  // each part half: a stand's miss walks by `walk`
 }
 
 }  // namespace ifab::sequencer

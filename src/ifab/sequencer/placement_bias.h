@@ -73,24 +73,55 @@ class PlacementBiasFilter {
   int looks_{0};
 };
 
-/// The filters a mission keeps: one for the robot (the arm's posture repeats at every stand), or
-/// one per building position (each stand also has its own floor under the tracks and its own
-/// view of the stack's top, and the robot comes back to it within centimetres). Every filter
-/// walks at each placement: the stack grows for all of them.
+/// Which misses the mission keeps apart.
+enum class PlacementBiasScope {
+  kRobot,     ///< one for the robot (the arm's posture repeats at every stand)
+  kPosition,  ///< one per building position (each stand also has its own floor under the tracks,
+              ///< its own view of the stack's top, and the wrist turns by its own angle there)
+  /// Both: a stand's miss is the robot's part, learned from every stand's looks, plus the stand's
+  /// own, learned from its looks (a hierarchical model: the first brick at a stand is sent
+  /// against what the other stands showed, and the stands' parts are kept apart thereafter).
+  kRobotAndPosition,
+};
+
+/// The filters a mission keeps, by scope. Every filter walks at each placement: the stack grows
+/// for all of them (with both parts, each walks by walk / sqrt(2), so a stand's miss walks by walk).
 class PlacementBiasLearner {
  public:
-  explicit PlacementBiasLearner(PlacementBiasOptions options = {}, bool per_position = false);
+  explicit PlacementBiasLearner(PlacementBiasOptions options = {},
+                                PlacementBiasScope scope = PlacementBiasScope::kRobot);
 
-  /// The filter that sends and learns the bricks placed from `position`.
-  PlacementBiasFilter& For(const std::string& position);
+  /// The miss expected at `position` [m] (base frame) and its covariance [m^2].
+  Eigen::Vector2d Bias(const std::string& position);
+  Eigen::Matrix2d Covariance(const std::string& position);
+  /// One look at a brick placed from `position` (as PlacementBiasFilter::Update takes it).
+  void Update(const std::string& position, const Eigen::Vector2d& u, double z, double std);
+  void Update(const std::string& position, const Eigen::Vector2d& z, const Eigen::Matrix2d& covariance);
+  /// As PlacementBiasFilter::FusedMiss, at `position`.
+  Eigen::Vector2d FusedMiss(const std::string& position, const Eigen::Vector2d& z, const Eigen::Matrix2d& covariance);
   /// To the next placement: every filter's random walk.
   void Predict();
 
  private:
+  PlacementBiasFilter& For(const std::string& position);
+  // kRobotAndPosition: the joint state [robot; stand 1; stand 2; ...] (2 rows each, stands in the
+  // order first seen) with its covariance, and a stand's rows (added with the prior on first use).
+  int Block(const std::string& position);
+  Eigen::MatrixXd H(int block) const;  // 2 x n: the stand's miss = robot part + its own
+  void UpdateJoint(int block, const Eigen::MatrixXd& Hm, const Eigen::VectorXd& z, const Eigen::MatrixXd& R);
+  void AdaptNoise(double nis, int dof);
+
   PlacementBiasOptions o_;
-  bool per_position_;
+  PlacementBiasScope scope_;
   PlacementBiasFilter shared_;
   std::map<std::string, PlacementBiasFilter> by_position_;
+  std::map<std::string, int> blocks_;
+  Eigen::VectorXd x_;
+  Eigen::MatrixXd P_;
+  int looks_{0};
+  double nis_sum_{0.0};
+  int nis_dof_{0};
+  double noise_scale_{1.0};
 };
 
 }  // namespace ifab::sequencer

@@ -86,43 +86,48 @@ TEST(PlacementBiasTest, LearnsAConstantMissWithinItsReportedError) {
 // and the per-stand filters' mean normalized squared error at the end.
 struct StandsOutcome {
   double miss_rms_late{0.0}, nees{0.0};
+  double miss_rms_early{0.0};  // over placements 1-7 (each stand's first and second; the very first has no look)
 };
-StandsOutcome SimulateStands(std::uint64_t seed, bool per_position) {
+StandsOutcome SimulateStands(std::uint64_t seed, PlacementBiasScope scope) {
   RandomStream rng(seed);
   const PlacementBiasOptions options;
   const Eigen::Vector2d common(rng.Normal(0.002), rng.Normal(0.002));
   Eigen::Vector2d truth[4];
   for (auto& t : truth) t = common + Eigen::Vector2d(rng.Normal(0.002), rng.Normal(0.002));
-  PlacementBiasLearner learner(options, per_position);
+  PlacementBiasLearner learner(options, scope);
   const std::string name[4] = {"west", "north-west", "north-east", "east"};
-  double sum2 = 0.0;
-  int n = 0;
+  double sum2 = 0.0, early2 = 0.0;
+  int n = 0, early = 0;
   for (int k = 0; k < 26; ++k) {
     const int stand = k % 4;
     const Eigen::Matrix2d R_site_base =
         Eigen::Rotation2Dd(DegToRad(kStandHeadingDeg[stand])).toRotationMatrix();
-    const Eigen::Vector2d sent = learner.For(name[stand]).bias();
+    const Eigen::Vector2d sent = learner.Bias(name[stand]);
     const Eigen::Vector2d miss_base =
         truth[stand] - sent + Eigen::Vector2d(rng.Normal(options.scatter), rng.Normal(options.scatter));
     if (k >= 9) {
       sum2 += (truth[stand] - sent).squaredNorm();
       ++n;
     }
+    if (k >= 1 && k <= 7) {
+      early2 += (truth[stand] - sent).squaredNorm();
+      ++early;
+    }
     if (k == 25) break;
     const Eigen::Matrix2d R_site_box = Eigen::Rotation2Dd(k % 2 ? kPi / 2 : 0.0).toRotationMatrix();
     for (int a = 0; a < 2; ++a) {
       const Eigen::Vector2d u = R_site_base.transpose() * R_site_box.col(a);
-      learner.For(name[stand]).Update(u, u.dot(miss_base) + rng.Normal(0.0003) + u.dot(sent), 0.0003);
+      learner.Update(name[stand], u, u.dot(miss_base) + rng.Normal(0.0003) + u.dot(sent), 0.0003);
     }
     learner.Predict();
     for (auto& t : truth) t += Eigen::Vector2d(rng.Normal(options.walk), rng.Normal(options.walk));
   }
   StandsOutcome out;
   out.miss_rms_late = std::sqrt(sum2 / n);
+  out.miss_rms_early = std::sqrt(early2 / early);
   for (int s = 0; s < 4; ++s) {
-    const PlacementBiasFilter& f = learner.For(name[s]);
-    const Eigen::Vector2d e = f.bias() - truth[s];
-    out.nees += e.dot(f.covariance().inverse() * e) / 4.0;
+    const Eigen::Vector2d e = learner.Bias(name[s]) - truth[s];
+    out.nees += e.dot(learner.Covariance(name[s]).inverse() * e) / 4.0;
   }
   return out;
 }
@@ -135,8 +140,8 @@ TEST(PlacementBiasTest, OneFilterPerStandLearnsEachStandsOwnMiss) {
   constexpr int kRobots = 200;
   double per2 = 0.0, shared2 = 0.0, per_nees = 0.0, shared_nees = 0.0;
   for (int s = 0; s < kRobots; ++s) {
-    const StandsOutcome per = SimulateStands(5000 + s, true);
-    const StandsOutcome shared = SimulateStands(5000 + s, false);
+    const StandsOutcome per = SimulateStands(5000 + s, PlacementBiasScope::kPosition);
+    const StandsOutcome shared = SimulateStands(5000 + s, PlacementBiasScope::kRobot);
     per2 += per.miss_rms_late * per.miss_rms_late;
     shared2 += shared.miss_rms_late * shared.miss_rms_late;
     per_nees += per.nees / kRobots;
@@ -145,6 +150,27 @@ TEST(PlacementBiasTest, OneFilterPerStandLearnsEachStandsOwnMiss) {
   EXPECT_LT(std::sqrt(per2 / shared2), 0.6) << "per-stand against shared, corrected miss rms";
   EXPECT_NEAR(per_nees, 2.0, 0.5);
   EXPECT_GT(shared_nees, 4.0);
+}
+
+TEST(PlacementBiasTest, TheRobotsPartSendsEachStandsFirstBricksBetter) {
+  // Over 200 robots whose stands share a common miss (2 mm per axis) and differ by 2 mm more: with
+  // the robot's part learned from every stand, a stand's first bricks go against what the other
+  // stands showed; later, each stand's own part is learned as with one filter per stand. Both
+  // parts' covariance stays true (normalized squared error ~ chi2(2): mean 2).
+  constexpr int kRobots = 200;
+  double both_early = 0.0, per_early = 0.0, both_late = 0.0, per_late = 0.0, nees = 0.0;
+  for (int s = 0; s < kRobots; ++s) {
+    const StandsOutcome both = SimulateStands(5000 + s, PlacementBiasScope::kRobotAndPosition);
+    const StandsOutcome per = SimulateStands(5000 + s, PlacementBiasScope::kPosition);
+    both_early += both.miss_rms_early * both.miss_rms_early;
+    per_early += per.miss_rms_early * per.miss_rms_early;
+    both_late += both.miss_rms_late * both.miss_rms_late;
+    per_late += per.miss_rms_late * per.miss_rms_late;
+    nees += both.nees / kRobots;
+  }
+  EXPECT_LT(std::sqrt(both_early / per_early), 0.9) << "placements 1-7, both parts against the stands apart";
+  EXPECT_LT(std::sqrt(both_late / per_late), 1.1) << "placements 9-25";
+  EXPECT_NEAR(nees, 2.0, 0.5);
 }
 
 TEST(PlacementBiasTest, AnAxisNeverSeenKeepsItsPrior) {
