@@ -9,6 +9,7 @@
 #include <cmath>
 
 #include "ifab/core/config.h"
+#include "ifab/perception/fit_quality.h"
 #include "ifab/perception/pose_solver.h"
 
 namespace ifab {
@@ -104,19 +105,12 @@ GroundExtentOptions GroundExtentOptions::FromConfig(const ConfigNode& c) {
 namespace {
 
 // The chi-square quantile with k degrees of freedom at the upper tail probability of a two-sided
-// normal test at `sigmas` (Wilson and Hilferty 1931; within 1 % of the exact quantile for these
-// tails). With k = 1 it is sigmas^2: the one-sector test is the plain z-test of the mean.
+// normal test at `sigmas` (Wilson-Hilferty). With k = 1 it is exactly sigmas^2: the one-sector
+// test is the plain z-test of the ring's mean.
 double ChiSquareBound(int k, double sigmas) {
   if (k == 1) return sigmas * sigmas;
-  const double p = std::erfc(sigmas / std::sqrt(2.0));  // the tail probability
-  // The one-sided normal quantile of p, by bisection on erfc (monotone).
-  double lo = 0.0, hi = 40.0;
-  for (int i = 0; i < 100; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    (0.5 * std::erfc(mid / std::sqrt(2.0)) > p ? lo : hi) = mid;
-  }
-  const double z = 0.5 * (lo + hi), a = 2.0 / (9.0 * k);
-  return k * std::pow(1.0 - a + z * std::sqrt(a), 3);
+  const double tail = std::erfc(sigmas / std::sqrt(2.0));
+  return ChiSquareQuantile(k, NormalQuantile(1.0 - tail));
 }
 
 }  // namespace
@@ -162,12 +156,14 @@ GroundExtent MeasureGroundExtent(const std::vector<CalibrationSweep>& sweeps, co
   while (r < max_radius) {
     Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
     Eigen::Vector3d b = Eigen::Vector3d::Zero();
+    double hh = 0.0;
     int inside = 0;
     for (const auto& g : ground)
       if (g.rho < r) {
         const Eigen::Vector3d a(1.0, g.x, g.y);
         A += a * a.transpose();
         b += a * g.h;
+        hh += g.h * g.h;
         ++inside;
       }
     const double outer = std::min(r + w, max_radius);
@@ -182,9 +178,7 @@ GroundExtent MeasureGroundExtent(const std::vector<CalibrationSweep>& sweeps, co
     Eigen::Matrix3d plane_cov = Eigen::Matrix3d::Zero();
     if (fitted) {
       plane = ldlt.solve(b);
-      double ss = 0.0;
-      for (const auto& g : ground)
-        if (g.rho < r) ss += std::pow(g.h - plane.dot(Eigen::Vector3d(1.0, g.x, g.y)), 2);
+      const double ss = std::max(0.0, hh - b.dot(plane));  // the inside residuals' sum of squares at the solution
       plane_cov = ss / std::max(1, inside - 3) * ldlt.solve(Eigen::Matrix3d::Identity());
     }
     std::vector<Eigen::Vector3d> regressor(static_cast<std::size_t>(K), Eigen::Vector3d::Zero());

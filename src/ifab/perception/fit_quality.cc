@@ -10,6 +10,8 @@ namespace {
 
 double NormalCdf(double x) { return 0.5 * std::erfc(-x / std::sqrt(2.0)); }
 
+}  // namespace
+
 // Inverse of the normal CDF on (0, 1) by bisection (called a few times per solve).
 double NormalQuantile(double p) {
   double lo = -10.0, hi = 10.0;
@@ -20,7 +22,14 @@ double NormalQuantile(double p) {
   return 0.5 * (lo + hi);
 }
 
-}  // namespace
+double ChiSquareNormalScore(double x, double k) {
+  return (std::cbrt(x / k) - (1.0 - 2.0 / (9.0 * k))) / std::sqrt(2.0 / (9.0 * k));
+}
+
+double ChiSquareQuantile(double k, double z) {
+  const double a = 2.0 / (9.0 * k);
+  return k * std::pow(1.0 - a + z * std::sqrt(a), 3);
+}
 
 double RobustScale(std::vector<double> a, double gate) {
   if (a.empty()) return 1.0;
@@ -38,9 +47,7 @@ FitQuality AssessFit(const std::vector<double>& whitened, double cost, int num_r
   f.degrees_of_freedom = std::max(1, num_residuals - num_parameters);
   const double sum_sq = 2.0 * cost;
   f.variance_factor = num_residuals > num_parameters ? sum_sq / f.degrees_of_freedom : 1.0;
-  // Wilson-Hilferty: (X / k)^(1/3) is about normal with mean 1 - 2 / (9k), variance 2 / (9k).
-  const double k = f.degrees_of_freedom;
-  f.chi2_z = (std::cbrt(sum_sq / k) - (1.0 - 2.0 / (9.0 * k))) / std::sqrt(2.0 / (9.0 * k));
+  f.chi2_z = ChiSquareNormalScore(sum_sq, f.degrees_of_freedom);
   std::vector<double> a;
   a.reserve(whitened.size());
   int within = 0;

@@ -27,6 +27,14 @@ struct FitQuality {
   std::string message;
 };
 
+/// The standard normal distribution's quantile at probability p in (0, 1).
+double NormalQuantile(double p);
+/// Wilson and Hilferty (1931): (X / k)^(1/3) of X ~ chi^2(k) is about normal with mean
+/// 1 - 2 / (9k) and variance 2 / (9k). The normal score of x under chi^2(k), and the quantile of
+/// chi^2(k) at the normal score z (its inverse; within about 1 % for k >= 2 in the upper tail).
+double ChiSquareNormalScore(double x, double k);
+double ChiSquareQuantile(double k, double z);
+
 /// Robust scale of whitened residuals: 1.4826 median |r|, corrected for the gate that cut them
 /// at `gate` sigmas (0: no gate): the median of a normal truncated at +-g is smaller.
 double RobustScale(std::vector<double> abs_whitened, double gate);

@@ -15,21 +15,19 @@ PlacementBiasFilter::PlacementBiasFilter(PlacementBiasOptions options)
 
 void PlacementBiasFilter::Predict() { covariance_ += Eigen::Matrix2d::Identity() * o_.walk * o_.walk; }
 
-void PlacementBiasFilter::AdaptNoise(double nis, int dof) {
-  // The first two looks meet the wide prior (their innovation is mostly the bias itself); from
-  // the third on, the innovations are mostly the looks' noise.
-  if (!o_.adapt_noise || looks_ < 2) return;
+void LookNoiseScale::Add(bool enabled, int looks, double nis, int dof) {
+  if (!enabled || looks < 2) return;
   nis_sum_ += nis;
   nis_dof_ += dof;
-  noise_scale_ = std::max(1.0, nis_sum_ / nis_dof_);
+  scale_ = std::max(1.0, nis_sum_ / nis_dof_);
 }
 
 void PlacementBiasFilter::Update(const Eigen::Vector2d& u, double z, double std) {
   const double r2 = std * std + o_.scatter * o_.scatter;
   const Eigen::Vector2d Pu = covariance_ * u;
   const double innovation = z - u.dot(bias_);
-  AdaptNoise(innovation * innovation / (u.dot(Pu) + r2), 1);
-  const double s = u.dot(Pu) + noise_scale_ * r2;
+  noise_.Add(o_.adapt_noise, looks_, innovation * innovation / (u.dot(Pu) + r2), 1);
+  const double s = u.dot(Pu) + noise_.scale() * r2;
   bias_ += Pu * ((z - u.dot(bias_)) / s);
   covariance_ -= Pu * Pu.transpose() / s;
   covariance_ = 0.5 * (covariance_ + covariance_.transpose());
@@ -39,8 +37,8 @@ void PlacementBiasFilter::Update(const Eigen::Vector2d& u, double z, double std)
 void PlacementBiasFilter::Update(const Eigen::Vector2d& z, const Eigen::Matrix2d& covariance) {
   const Eigen::Matrix2d R = covariance + Eigen::Matrix2d::Identity() * o_.scatter * o_.scatter;
   const Eigen::Vector2d innovation = z - bias_;
-  AdaptNoise(innovation.dot((covariance_ + R).ldlt().solve(innovation)), 2);
-  const Eigen::Matrix2d S = covariance_ + noise_scale_ * R;
+  noise_.Add(o_.adapt_noise, looks_, innovation.dot((covariance_ + R).ldlt().solve(innovation)), 2);
+  const Eigen::Matrix2d S = covariance_ + noise_.scale() * R;
   const Eigen::Matrix2d K = covariance_ * S.inverse();
   bias_ += K * (z - bias_);
   covariance_ = (Eigen::Matrix2d::Identity() - K) * covariance_;
@@ -51,7 +49,7 @@ void PlacementBiasFilter::Update(const Eigen::Vector2d& z, const Eigen::Matrix2d
 Eigen::Vector2d PlacementBiasFilter::FusedMiss(const Eigen::Vector2d& z, const Eigen::Matrix2d& covariance) const {
   const Eigen::Matrix2d scatter = Eigen::Matrix2d::Identity() * o_.scatter * o_.scatter;
   const Eigen::Matrix2d expected = covariance_ + scatter;               // this placement's miss, before the look
-  const Eigen::Matrix2d look = noise_scale_ * (covariance + scatter) - scatter;  // the look's own noise, as Update scales it
+  const Eigen::Matrix2d look = noise_.scale() * (covariance + scatter) - scatter;  // the look's own noise, as Update scales it
   return bias_ + expected * (expected + look).ldlt().solve(z - bias_);
 }
 
@@ -110,21 +108,12 @@ Eigen::Matrix2d PlacementBiasLearner::Covariance(const std::string& position) {
   return h * P_ * h.transpose();
 }
 
-void PlacementBiasLearner::AdaptNoise(double nis, int dof) {
-  // As PlacementBiasFilter::AdaptNoise: from the third look on.
-  if (!o_.adapt_noise || looks_ < 2) return;
-  nis_sum_ += nis;
-  nis_dof_ += dof;
-  noise_scale_ = std::max(1.0, nis_sum_ / nis_dof_);
-}
-
-void PlacementBiasLearner::UpdateJoint(int /*block*/, const Eigen::MatrixXd& Hm, const Eigen::VectorXd& z,
-                                       const Eigen::MatrixXd& R) {
+void PlacementBiasLearner::UpdateJoint(const Eigen::MatrixXd& Hm, const Eigen::VectorXd& z, const Eigen::MatrixXd& R) {
   const Eigen::VectorXd innovation = z - Hm * x_;
   const Eigen::MatrixXd HP = Hm * P_;
   const Eigen::MatrixXd prior = HP * Hm.transpose();
-  AdaptNoise(innovation.dot((prior + R).ldlt().solve(innovation)), static_cast<int>(z.size()));
-  const Eigen::MatrixXd S = prior + noise_scale_ * R;
+  noise_.Add(o_.adapt_noise, looks_, innovation.dot((prior + R).ldlt().solve(innovation)), static_cast<int>(z.size()));
+  const Eigen::MatrixXd S = prior + noise_.scale() * R;
   const Eigen::MatrixXd K = S.ldlt().solve(HP).transpose();  // P H^T S^-1 (S symmetric)
   x_ += K * innovation;
   P_ -= K * HP;
@@ -136,7 +125,7 @@ void PlacementBiasLearner::Update(const std::string& position, const Eigen::Vect
   if (scope_ != PlacementBiasScope::kRobotAndPosition) return For(position).Update(u, z, std);
   const int b = Block(position);
   const Eigen::MatrixXd Hm = u.transpose() * H(b);
-  UpdateJoint(b, Hm, Eigen::VectorXd::Constant(1, z),
+  UpdateJoint(Hm, Eigen::VectorXd::Constant(1, z),
               Eigen::MatrixXd::Constant(1, 1, std * std + o_.scatter * o_.scatter));
 }
 
@@ -144,7 +133,7 @@ void PlacementBiasLearner::Update(const std::string& position, const Eigen::Vect
                                   const Eigen::Matrix2d& covariance) {
   if (scope_ != PlacementBiasScope::kRobotAndPosition) return For(position).Update(z, covariance);
   const int b = Block(position);
-  UpdateJoint(b, H(b), z, covariance + Eigen::Matrix2d::Identity() * o_.scatter * o_.scatter);
+  UpdateJoint(H(b), z, covariance + Eigen::Matrix2d::Identity() * o_.scatter * o_.scatter);
 }
 
 Eigen::Vector2d PlacementBiasLearner::FusedMiss(const std::string& position, const Eigen::Vector2d& z,
@@ -152,7 +141,7 @@ Eigen::Vector2d PlacementBiasLearner::FusedMiss(const std::string& position, con
   if (scope_ != PlacementBiasScope::kRobotAndPosition) return For(position).FusedMiss(z, covariance);
   const Eigen::Matrix2d scatter = Eigen::Matrix2d::Identity() * o_.scatter * o_.scatter;
   const Eigen::Matrix2d expected = Covariance(position) + scatter;
-  const Eigen::Matrix2d look = noise_scale_ * (covariance + scatter) - scatter;
+  const Eigen::Matrix2d look = noise_.scale() * (covariance + scatter) - scatter;
   const Eigen::Vector2d bias = Bias(position);
   return bias + expected * (expected + look).ldlt().solve(z - bias);
 }

@@ -35,6 +35,22 @@ bool ArmCanExplainMiss(const Eigen::Vector2d& miss, const Eigen::Matrix2d& look_
 /// The chi-square quantile of 2 dof at 99.9 %: -2 ln(1 - 0.999) (closed form for 2 dof).
 inline constexpr double kChi2Dof2P999 = 13.8155;
 
+/// Mehra's covariance matching of the looks' noise (PlacementBiasOptions::adapt_noise): the mean
+/// normalized innovation squared per degree of freedom, once above 1, scales the looks' noise.
+/// The first two looks meet the wide prior (their innovation is mostly the bias itself) and are
+/// not counted; from the third on, the innovations are mostly the looks' noise.
+class LookNoiseScale {
+ public:
+  /// One innovation's normalized square `nis` over `dof`, before the filter's look number `looks` + 1.
+  void Add(bool enabled, int looks, double nis, int dof);
+  double scale() const { return scale_; }
+
+ private:
+  double nis_sum_{0.0};
+  int nis_dof_{0};
+  double scale_{1.0};
+};
+
 /// A Kalman filter on the miss (x, y in the frame the bricks are sent in: the base's).
 class PlacementBiasFilter {
  public:
@@ -58,16 +74,11 @@ class PlacementBiasFilter {
   const Eigen::Matrix2d& covariance() const { return covariance_; }
   int looks() const { return looks_; }
   /// The factor the looks' noise is scaled by (adapt_noise; 1 otherwise).
-  double noise_scale() const { return noise_scale_; }
+  double noise_scale() const { return noise_.scale(); }
 
  private:
-  /// Records one innovation's normalized square against its `dof` and rescales the noise.
-  void AdaptNoise(double nis, int dof);
-
   PlacementBiasOptions o_;
-  double nis_sum_{0.0};
-  int nis_dof_{0};
-  double noise_scale_{1.0};
+  LookNoiseScale noise_;
   Eigen::Vector2d bias_{Eigen::Vector2d::Zero()};
   Eigen::Matrix2d covariance_;
   int looks_{0};
@@ -108,8 +119,7 @@ class PlacementBiasLearner {
   // order first seen) with its covariance, and a stand's rows (added with the prior on first use).
   int Block(const std::string& position);
   Eigen::MatrixXd H(int block) const;  // 2 x n: the stand's miss = robot part + its own
-  void UpdateJoint(int block, const Eigen::MatrixXd& Hm, const Eigen::VectorXd& z, const Eigen::MatrixXd& R);
-  void AdaptNoise(double nis, int dof);
+  void UpdateJoint(const Eigen::MatrixXd& Hm, const Eigen::VectorXd& z, const Eigen::MatrixXd& R);
 
   PlacementBiasOptions o_;
   PlacementBiasScope scope_;
@@ -119,9 +129,7 @@ class PlacementBiasLearner {
   Eigen::VectorXd x_;
   Eigen::MatrixXd P_;
   int looks_{0};
-  double nis_sum_{0.0};
-  int nis_dof_{0};
-  double noise_scale_{1.0};
+  LookNoiseScale noise_;
 };
 
 }  // namespace ifab::sequencer

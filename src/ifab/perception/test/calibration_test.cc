@@ -131,6 +131,27 @@ TEST(AveragePoses, AveragesTranslationAndRotation) {
 }
 
 
+// Returns about the cube out to 1.2 m, seen by a laser at the base origin with the flange at
+// identity: the cube's top within its footprint, elsewhere the floor at `floor(rho, phi)` (rho
+// the distance from the cube's centre, phi the bearing about it), with `noise` m of range noise.
+template <typename Floor>
+CalibrationSweep GroundAboutCube(const Pose3& cube, std::uint64_t seed, int returns, double noise, Floor floor) {
+  RandomStream rng(seed);
+  CalibrationSweep sweep;
+  sweep.name = "synthetic";
+  for (int i = 0; i < returns; ++i) {
+    const double rho = 0.05 + 1.15 * std::sqrt(rng.Uniform(0.0, 1.0));
+    const double phi = rng.Uniform(-M_PI, M_PI);
+    const Eigen::Vector2d xy = cube.translation().head<2>() + rho * Eigen::Vector2d(std::cos(phi), std::sin(phi));
+    const Eigen::Vector3d c = cube.inverse(Eigen::Isometry) * Eigen::Vector3d(xy.x(), xy.y(), 0.0);
+    const double z = std::abs(c.x()) < 0.125 && std::abs(c.y()) < 0.125 ? 0.25 : floor(rho, phi);
+    SweepPoint p;
+    p.p_laser = Eigen::Vector3d(xy.x(), xy.y(), z + rng.Normal(noise));
+    sweep.points.push_back(p);
+  }
+  return sweep;
+}
+
 // A floor flat out to 0.7 m from the cube that bows beyond it (1 mm at 0.8 m, 4 mm at 0.9 m), seen
 // with 10 mm range noise: the ground is kept as one plane out to where it bows, within a ring; a
 // flat floor is kept out to its edge. Statistics over three noise seeds.
@@ -138,21 +159,9 @@ TEST(GroundExtent, KeepsTheGroundOutToWhereItBows) {
   const Pose3 cube = PoseFromXyzRpy(1.7, 0.0, 0.125, 0.0, 0.0, 0.2);
   for (const bool bows : {true, false}) {
     for (std::uint64_t seed = 1; seed <= 3; ++seed) {
-      RandomStream rng(seed);
-      CalibrationSweep sweep;
-      sweep.name = "synthetic";
-      for (int i = 0; i < 60000; ++i) {
-        const double rho = 0.05 + 1.15 * std::sqrt(rng.Uniform(0.0, 1.0));
-        const double phi = rng.Uniform(-M_PI, M_PI);
-        const Eigen::Vector2d xy = cube.translation().head<2>() + rho * Eigen::Vector2d(std::cos(phi), std::sin(phi));
-        const Eigen::Vector3d c = cube.inverse(Eigen::Isometry) * Eigen::Vector3d(xy.x(), xy.y(), 0.0);
-        double z = 0.0;
-        if (std::abs(c.x()) < 0.125 && std::abs(c.y()) < 0.125) z = 0.25;  // the cube's top
-        else if (bows && rho > 0.7) z = 0.1 * (rho - 0.7) * (rho - 0.7);
-        SweepPoint p;  // the laser at the base origin, the flange at identity
-        p.p_laser = Eigen::Vector3d(xy.x(), xy.y(), z + rng.Normal(0.010));
-        sweep.points.push_back(p);
-      }
+      const CalibrationSweep sweep = GroundAboutCube(cube, seed, 60000, 0.010, [&](double rho, double) {
+        return bows && rho > 0.7 ? 0.1 * (rho - 0.7) * (rho - 0.7) : 0.0;
+      });
       const GroundExtent g =
           MeasureGroundExtent({sweep}, Pose3::Identity(), Pose3::Identity(), cube, 0.25, 1.2, GroundExtentOptions{});
       SCOPED_TRACE(g.message);
@@ -179,21 +188,9 @@ TEST(GroundExtent, KeepsTheGroundOutToWhereItBows) {
 TEST(GroundExtent, SectorsSeeAFloorThatTwists) {
   const Pose3 cube = PoseFromXyzRpy(1.7, 0.0, 0.125, 0.0, 0.0, 0.2);
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
-    RandomStream rng(seed);
-    CalibrationSweep sweep;
-    sweep.name = "synthetic";
-    for (int i = 0; i < 60000; ++i) {
-      const double rho = 0.05 + 1.15 * std::sqrt(rng.Uniform(0.0, 1.0));
-      const double phi = rng.Uniform(-M_PI, M_PI);
-      const Eigen::Vector2d xy = cube.translation().head<2>() + rho * Eigen::Vector2d(std::cos(phi), std::sin(phi));
-      const Eigen::Vector3d c = cube.inverse(Eigen::Isometry) * Eigen::Vector3d(xy.x(), xy.y(), 0.0);
-      double z = 0.0;
-      if (std::abs(c.x()) < 0.125 && std::abs(c.y()) < 0.125) z = 0.25;
-      else if (rho > 0.7) z = 0.1 * (rho - 0.7) * (rho - 0.7) * std::cos(phi);
-      SweepPoint p;
-      p.p_laser = Eigen::Vector3d(xy.x(), xy.y(), z + rng.Normal(0.010));
-      sweep.points.push_back(p);
-    }
+    const CalibrationSweep sweep = GroundAboutCube(cube, seed, 60000, 0.010, [](double rho, double phi) {
+      return rho > 0.7 ? 0.1 * (rho - 0.7) * (rho - 0.7) * std::cos(phi) : 0.0;
+    });
     GroundExtentOptions ring_only;
     ring_only.sectors = 1;
     const GroundExtent whole = MeasureGroundExtent({sweep}, Pose3::Identity(), Pose3::Identity(), cube, 0.25, 1.2, ring_only);
@@ -214,18 +211,7 @@ TEST(GroundExtent, AFlatFloorIsKeptWholeAcrossSeeds) {
   const Pose3 cube = PoseFromXyzRpy(1.7, 0.0, 0.125, 0.0, 0.0, 0.2);
   int limited = 0;
   for (std::uint64_t seed = 11; seed <= 30; ++seed) {
-    RandomStream rng(seed);
-    CalibrationSweep sweep;
-    for (int i = 0; i < 30000; ++i) {
-      const double rho = 0.05 + 1.15 * std::sqrt(rng.Uniform(0.0, 1.0));
-      const double phi = rng.Uniform(-M_PI, M_PI);
-      const Eigen::Vector2d xy = cube.translation().head<2>() + rho * Eigen::Vector2d(std::cos(phi), std::sin(phi));
-      const Eigen::Vector3d c = cube.inverse(Eigen::Isometry) * Eigen::Vector3d(xy.x(), xy.y(), 0.0);
-      const double z = std::abs(c.x()) < 0.125 && std::abs(c.y()) < 0.125 ? 0.25 : 0.0;
-      SweepPoint p;
-      p.p_laser = Eigen::Vector3d(xy.x(), xy.y(), z + rng.Normal(0.010));
-      sweep.points.push_back(p);
-    }
+    const CalibrationSweep sweep = GroundAboutCube(cube, seed, 30000, 0.010, [](double, double) { return 0.0; });
     const GroundExtent g = MeasureGroundExtent({sweep}, Pose3::Identity(), Pose3::Identity(), cube, 0.25, 1.2, {});
     if (g.limited) ++limited;
   }
