@@ -31,9 +31,14 @@ AssembledSweep AssembleSweep(const std::vector<LaserScan>& scans, const std::vec
   q_series.reserve(joints.size());
   for (const auto& j : joints) q_series.push_back({j.stamp.t, j.q});
   std::stable_sort(q_series.begin(), q_series.end(), [](const auto& a, const auto& b) { return a.t < b.t; });
-  std::vector<Pose3> sample_poses;  // flange at each sample (kPose)
+  // kPose: the flange at each sample, its rotation as a quaternion once (slerped per beam)
+  std::vector<Pose3> sample_poses;
+  std::vector<Eigen::Quaterniond> sample_rotations;
   if (options.interpolation == ArmInterpolation::kPose)
-    for (const auto& s : q_series) sample_poses.push_back(robot.T_base_arm_base * robot.ArmForwardKinematics(s.value));
+    for (const auto& s : q_series) {
+      sample_poses.push_back(robot.T_base_arm_base * robot.ArmForwardKinematics(s.value));
+      sample_rotations.emplace_back(sample_poses.back().linear());
+    }
 
   for (std::size_t k = 0; k < scans.size(); ++k) {
     const LaserScan& scan = scans[k];
@@ -59,7 +64,9 @@ AssembledSweep AssembleSweep(const std::vector<LaserScan>& scans, const std::vec
       if (options.interpolation == ArmInterpolation::kJoint) {
         p.T_base_tool0 = robot.T_base_arm_base * robot.ArmForwardKinematics(p.q);
       } else {
-        p.T_base_tool0 = Interpolate(sample_poses[a], sample_poses[a + 1], s);
+        p.T_base_tool0.linear() = sample_rotations[a].slerp(s, sample_rotations[a + 1]).toRotationMatrix();
+        p.T_base_tool0.translation() =
+            (1.0 - s) * sample_poses[a].translation() + s * sample_poses[a + 1].translation();
       }
       out.points.push_back(p);
     }

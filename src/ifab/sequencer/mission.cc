@@ -658,6 +658,15 @@ Mission::Sweep Mission::SweepWorkpiece(VisitLog& log, int sweep) {
   return out;
 }
 
+namespace {
+/// A registration whose result only starts the next one (after the range bias is compensated with
+/// the incidences it gives): without restarts, which the final registration runs from there.
+RegistrationOptions Preliminary(RegistrationOptions o) {
+  o.restarts = 0;
+  return o;
+}
+}  // namespace
+
 bool Mission::Localize(VisitLog& log) {
   if (workpiece_.bricks.empty()) {  // nothing built yet: the start pose is all there is
     log.localized = false;
@@ -683,15 +692,19 @@ bool Mission::Localize(VisitLog& log) {
       guess = LevelledPose(T_site_base, *up_scan);
       held[3] = held[4] = true;  // roll and pitch, about the base's x and y through the site origin
     }
-    SiteLocalization loc = LocalizeInSite(log.cloud, model, guess, c_.registration, true, held);
+    // With the range bias's incidence taken from the model, this registration only says where the
+    // model is for that, and the one after it starts from its result: restarts there (issue 15).
+    const RangeBiasCompensation& bias = c_.assembly.range_bias;
+    const bool preliminary = bias.active() && bias.incidence_from_model;
+    SiteLocalization loc = LocalizeInSite(log.cloud, model, guess, preliminary ? Preliminary(c_.registration) : c_.registration,
+                                          true, held);
     // Range bias with the incidence on the registered model (a brick's 52 mm side is narrower
     // than the normals' neighbourhood), then register again from there. That registration waits
     // for the top brick's footprint below, which changes the model and registers again anyway:
     // one registration instead of two (the size comes from near faces and far edges both, so
     // the first registration's pose measures it as well; issue 15, session 24).
-    const RangeBiasCompensation& bias = c_.assembly.range_bias;
     bool register_again = false;
-    if (bias.active() && bias.incidence_from_model && loc.IsUsable()) {
+    if (preliminary && loc.IsUsable()) {
       const ifab::Scene at_registration(SiteBodies(model, loc.T_site_base, true));
       log.cloud = swept.raw_cloud;
       CompensateRangeBias(log.cloud, bias, &at_registration);
@@ -883,18 +896,36 @@ bool Mission::CheckPlacement(int k, VisitLog& log) {
   }
   const bool against_localization = o_.check_against == CheckAgainst::kLocalization;
   std::vector<RegistrationBody> bodies = SiteBodies(below, guess, true);
+  // Against the localization everything but the new brick is held where the visit registered it
+  // (the ground too: the brick's height and heading are its own), so only the points the brick
+  // could claim inform the fit: those within the registration's max_distance of its box. The
+  // rest would be matched at every step to inform nothing (issue 15: a look cost more than a
+  // localization).
   for (auto& b : bodies)
-    if (b.name == "site") b.fixed = against_localization ? std::array<bool, 6>{true, true, true, true, true, true} : held;
+    if (b.name == "site" || (against_localization && b.name == "ground"))
+      b.fixed = against_localization ? std::array<bool, 6>{true, true, true, true, true, true} : held;
+  if (against_localization && c_.registration.max_distance > 0.0) {
+    const Pose3 T_brick_base = (guess.inverse(Eigen::Isometry) * placed.T_site_box).inverse(Eigen::Isometry);
+    const Eigen::Vector3d half = 0.5 * placed.box.size;
+    const double reach = c_.registration.max_distance;
+    const auto near_brick = [&](const RayPoint& p) {
+      const Eigen::Vector3d q = T_brick_base * p.p;
+      return (q.cwiseAbs() - half).cwiseMax(0.0).norm() <= reach;
+    };
+    std::erase_if(swept.cloud, [&](const RayPoint& p) { return !near_brick(p); });
+    std::erase_if(swept.raw_cloud, [&](const RayPoint& p) { return !near_brick(p); });
+  }
   RegistrationBody brick{"placed", guess.inverse(Eigen::Isometry), {}, true};
   for (const RigidObject& o : alone.Objects())
     if (o.name == placed.name) brick.parts.push_back(o);
   brick.fixed = {false, false, false, true, true, false};  // it lies on the brick below
   bodies.push_back(brick);
-  RegistrationSummary reg = Register(swept.cloud, bodies, c_.registration);
   // The range bias with the incidence on the registered bodies, then register again, as Localize
   // does: the sweep's own normals blur a brick's 52 mm side into its top, and the bias they give
   // moved a lone brick by 1.5 / 2.5 mm in the exact world (README, session 19).
   const RangeBiasCompensation& bias = c_.assembly.range_bias;
+  const bool preliminary = bias.active() && bias.incidence_from_model;
+  RegistrationSummary reg = Register(swept.cloud, bodies, preliminary ? Preliminary(c_.registration) : c_.registration);
   std::vector<RayPoint> compensated;
   const std::vector<RayPoint>* look_cloud = &swept.cloud;
   if (bias.active() && bias.incidence_from_model && reg.IsUsable() && reg.bodies.size() == bodies.size()) {
