@@ -31,8 +31,30 @@ std::string ShortConfigWith(const std::vector<std::pair<std::string, std::string
   std::stringstream text;
   text << in.rdbuf();
   std::string s = text.str();
-  for (const auto& [key, value] : keys)
-    s = std::regex_replace(s, std::regex("\\n" + key + ":[^\\n]*"), "\n" + key + ": " + value);
+  for (const auto& [key, value] : keys) {
+    if (value.empty() || value.front() != '\n') {
+      s = std::regex_replace(s, std::regex("\\n" + key + ":[^\\n]*"), "\n" + key + ": " + value);
+      continue;
+    }
+    // A block of keys for a section ("\n  k: v" lines): each replaces the section's own line of
+    // that key, or joins the section (a key given twice is an error).
+    const std::size_t head = s.find("\n" + key + ":");
+    if (head == std::string::npos) throw std::runtime_error("no section " + key);
+    const std::size_t body = s.find('\n', head + 1);
+    std::smatch next;
+    const std::string rest = s.substr(body);
+    const std::size_t end =
+        std::regex_search(rest, next, std::regex("\\n[^ #\\n]")) ? body + static_cast<std::size_t>(next.position(0)) : s.size();
+    std::string section = s.substr(body, end - body);
+    std::istringstream lines(value.substr(1));
+    for (std::string line; std::getline(lines, line);) {
+      const std::string name = line.substr(0, line.find(':'));
+      const std::regex own("\\n" + name + ":[^\\n]*");
+      if (std::regex_search(section, own)) section = std::regex_replace(section, own, "\n" + line);
+      else section = "\n" + line + section;
+    }
+    s = s.substr(0, body) + section + s.substr(end);
+  }
   // Paths in the file are relative to data/experiments/.
   s = std::regex_replace(s, std::regex(": \\.\\./"), ": " + DataPath("") + "/");
   const auto path = std::filesystem::path(::testing::TempDir()) / (name + ".yaml");

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 namespace ifab {
@@ -16,6 +17,26 @@ std::string KeyText(const YAML::Node& key, const std::string& file, const std::s
     ThrowInputError("{}:{}: {}: expected field names, got a {} as a key", file, key.Mark().line + 1,
                     path.empty() ? "(top level)" : path, key.IsSequence() ? "list" : "map");
   return key.Scalar();
+}
+
+// YAML wants a map's keys unique; yaml-cpp keeps both and a lookup finds the first, so a key given
+// twice (an edited copy, a pasted block) would silently read one value and drop the other.
+void RejectDuplicateKeys(const YAML::Node& node, const std::string& file, const std::string& path) {
+  if (node.IsSequence()) {
+    for (std::size_t i = 0; i < node.size(); ++i) RejectDuplicateKeys(node[i], file, fmt::format("{}[{}]", path, i));
+    return;
+  }
+  if (!node.IsMap()) return;
+  std::map<std::string, int> first_line;
+  for (const auto& kv : node) {
+    if (!kv.first.IsScalar()) continue;  // KeyText says what is wrong with it when it is read
+    const std::string key = kv.first.Scalar();
+    const std::string at = path.empty() ? key : path + "." + key;
+    const int line = kv.first.Mark().line + 1;
+    if (const auto [it, inserted] = first_line.emplace(key, line); !inserted)
+      ThrowInputError("{}:{}: {}: given twice (first on line {}); expected each key once", file, line, at, it->second);
+    RejectDuplicateKeys(kv.second, file, at);
+  }
 }
 
 }  // namespace
@@ -41,6 +62,7 @@ ConfigNode ConfigNode::FromString(const std::string& text, const std::string& na
   } catch (const YAML::Exception& e) {
     ThrowInputError("{}:{}: not valid YAML: {}", name, e.mark.line + 1, e.msg);
   }
+  RejectDuplicateKeys(root, name, "");
   return ConfigNode(root, std::make_shared<const std::string>(name), "", 1);
 }
 

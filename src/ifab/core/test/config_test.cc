@@ -46,6 +46,15 @@ TEST(Config, BadYamlAndMissingFile) {
               HasSubstr("/nonexistent/x.yaml: cannot open"));
 }
 
+// YAML keys are unique; yaml-cpp would keep both and read the first, dropping the other silently.
+TEST(Config, AKeyGivenTwiceIsRefusedWhereItRepeats) {
+  EXPECT_THAT(ErrorOf([] { ConfigNode::FromString("mission:\n  max_sweeps: 3\n  look: true\n  max_sweeps: 5\n", "exp.yaml"); }),
+              HasSubstr("exp.yaml:4: mission.max_sweeps: given twice (first on line 2)"));
+  EXPECT_THAT(ErrorOf([] { ConfigNode::FromString("sweeps:\n  - {joint: 1, joint: 2}\n", "plan.yaml"); }),
+              HasSubstr("plan.yaml:2: sweeps[0].joint: given twice"));
+  EXPECT_NO_THROW(ConfigNode::FromString("a: {x: 1}\nb: {x: 1}\n", "ok.yaml"));  // the same key in two maps
+}
+
 TEST(Config, SequencesNameTheirIndex) {
   const auto c = ConfigNode::FromString("bricks:\n  - size: [0.24, 0.1, 0.05]\n  - size: [0.24, -0.1]\n",
                                         "site.yaml");
