@@ -48,8 +48,8 @@ std::string ShortConfigWith(const std::vector<std::pair<std::string, std::string
     std::string section = s.substr(body, end - body);
     std::istringstream lines(value.substr(1));
     for (std::string line; std::getline(lines, line);) {
-      const std::string name = line.substr(0, line.find(':'));
-      const std::regex own("\\n" + name + ":[^\\n]*");
+      const std::string field = line.substr(0, line.find(':'));
+      const std::regex own("\\n" + field + ":[^\\n]*");
       if (std::regex_search(section, own)) section = std::regex_replace(section, own, "\n" + line);
       else section = "\n" + line + section;
     }
