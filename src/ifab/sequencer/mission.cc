@@ -905,7 +905,7 @@ bool Mission::CheckPlacement(int k, VisitLog& log) {
     if (b.name == "site" || (against_localization && b.name == "ground"))
       b.fixed = against_localization ? std::array<bool, 6>{true, true, true, true, true, true} : held;
   if (against_localization && c_.registration.max_distance > 0.0) {
-    const Pose3 T_brick_base = (guess.inverse(Eigen::Isometry) * placed.T_site_box).inverse(Eigen::Isometry);
+    const Pose3 T_brick_base = placed.T_site_box.inverse(Eigen::Isometry) * guess;
     const Eigen::Vector3d half = 0.5 * placed.box.size;
     const double reach = c_.registration.max_distance;
     const auto near_brick = [&](const RayPoint& p) {

@@ -166,10 +166,12 @@ struct MissionOptions {
   /// own: the model holds it where it was measured (the stack as built, not as designed), so the
   /// next registrations fit bricks where they are. Both sweeps share the scan's systematic errors
   /// (range bias, mount, arm), which cancel in the brick's pose relative to the stack.
-  /// Off: against the stack (check_against), over seeds 1-20 with gate_placement_check, it is no
+  /// Against the stack (check_against), over seeds 1-20 with gate_placement_check, it is no
   /// better than without the look (+0.14 / +0.20 mm paired, long / short; session 20). Against the
-  /// localization with learn_placement_bias: 1.30 / 1.40 mm against 1.56 / 1.50 (−0.26 ± 0.16 /
-  /// −0.10 ± 0.22 paired), at 1.7 times the run's time (README, issue 12, session 21).
+  /// localization with learn_placement_bias it is the brick-stack experiment's default since
+  /// session 29 (data/experiments/brick-stack.yaml): seeds 1-20 1.10 / 1.07 mm against 1.39 / 1.31
+  /// without it, at about the old run's time once the look registers only its brick's points.
+  /// false here: the mission as the paper flew it.
   bool check_placement{false};
   /// With check_placement: at each building position the goal is moved against the mean offset
   /// measured there before (scan-to-place errors repeat with the stand: the same postures, ranges
